@@ -1,0 +1,25 @@
+#pragma once
+#include <memory>
+
+#include "core/BreakageModel.h"
+#include "core/Config.h"
+
+namespace crumble {
+
+// Breakage model `none`: grains never break, so rigid runs are scenarios too.
+class NoBreakage final : public BreakageModel {
+ public:
+  std::string name() const override { return "none"; }
+  bool active() const override { return false; }
+  void assign_strength(Grain&, const Material&, Rng&) const override {}
+  void inherit_strength(const Grain&, Grain&, const Material&, Rng&) const override {}
+  Analysis analyse(const Grain&, const Material&, std::span<const Contact>) const override {
+    Analysis a;
+    a.outcome = "intact";
+    return a;
+  }
+};
+
+inline std::unique_ptr<BreakageModel> make_no_breakage(const Config&) { return std::make_unique<NoBreakage>(); }
+
+}  // namespace crumble

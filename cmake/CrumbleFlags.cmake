@@ -1,0 +1,7 @@
+add_library(crumble_flags INTERFACE)
+target_compile_options(crumble_flags INTERFACE -Wall -Wextra -Wno-unused-parameter)
+target_include_directories(crumble_flags INTERFACE ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
+if(CRUMBLE_SANITIZE)
+  target_compile_options(crumble_flags INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer)
+  target_link_options(crumble_flags INTERFACE -fsanitize=address,undefined)
+endif()

@@ -1,0 +1,70 @@
+// The rigid-body engine seam. An engine owns the dynamic state of the grains it was
+// given (by id) and the container walls; the Simulation keeps the Grain records
+// (shape, strength, lineage) and pulls poses and velocities with read_state() when it
+// needs them. Units are SI; an engine that prefers other units scales internally.
+#pragma once
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/Contact.h"
+#include "core/Grain.h"
+#include "core/Loading.h"
+
+namespace crumble {
+
+// Rigid box with a floor at z = 0 (2D: y = 0), side walls at x = 0, lx and y = 0, ly
+// (2D: x = 0, lx only), and a horizontal platen starting at `height` that the loading
+// moves. Wall friction comes from the materials.
+struct Container {
+  double lx = 0, ly = 0;
+  double height = 0;
+  double platen_mass = 0;  // kg, for force control; 0 = the grains' total (unscaled) mass
+};
+
+// What the Simulation hands every engine at construction.
+struct EngineContext {
+  int dimension = 3;
+  Vec3 gravity{0, 0, -9.81};
+  std::vector<Material> materials{Material{}};
+  int threads = 1;
+  std::uint64_t seed = 1;
+};
+
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  virtual std::string name() const = 0;
+
+  virtual void set_container(const Container& c) = 0;
+  virtual void add_grain(const Grain& g) = 0;
+  virtual void remove_grain(GrainId id) = 0;
+  // Children occupy the parent's space; their velocities are already set by the caller
+  // (v + ω × (c_child − c_parent)).
+  virtual void replace_grain(GrainId parent, std::span<const Grain> children) {
+    remove_grain(parent);
+    for (const auto& c : children) add_grain(c);
+  }
+  virtual std::size_t grain_count() const = 0;
+
+  virtual void step(double dt) = 0;
+  // Largest stable time step for explicit engines (infinity when the engine has none).
+  virtual double max_stable_dt() const;
+
+  // Copy engine poses and velocities into the records (matched by id).
+  virtual void read_state(std::span<Grain> grains) const = 0;
+  // Every active contact, grain–grain once (force on `a`) and grain–wall.
+  virtual std::vector<Contact> contacts() const = 0;
+
+  // Platen control along the vertical axis: a kinematic velocity (negative = down), or a
+  // force pushing the platen down while it moves freely (vertical translation only).
+  virtual void set_platen(const PlatenCommand& cmd) = 0;
+  virtual double platen_position() const = 0;
+  // Total force (N) the grains exert on the platen along the vertical axis, positive when
+  // they push it up (compression).
+  virtual double platen_force() const = 0;
+  // The same for the floor (positive when the grains push it down).
+  virtual double floor_force() const = 0;
+};
+
+}  // namespace crumble

@@ -1,0 +1,31 @@
+// The fragment-geometry seam: turn a Fracture into child shapes. Children are returned
+// in the parent's body frame (offset = child centroid); their volumes sum to the
+// parent's (the builder enforces it).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/Fracture.h"
+#include "geometry/Shape.h"
+
+namespace crumble {
+
+struct Fragment {
+  Shape::Ptr shape;   // centred on its own centroid
+  Vec3 offset;        // child centroid in the parent's body frame
+};
+
+struct FragmentResult {
+  std::vector<Fragment> children;
+  std::string method;     // e.g. "alpha_shape", "convex_hull", "plane_cut"
+  int fallbacks = 0;      // documented fallbacks taken (counted in summary.json)
+};
+
+class FragmentBuilder {
+ public:
+  virtual ~FragmentBuilder() = default;
+  virtual std::string name() const = 0;
+  virtual FragmentResult build(const Shape& parent, const Fracture& fracture) const = 0;
+};
+
+}  // namespace crumble

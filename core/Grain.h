@@ -1,0 +1,47 @@
+#pragma once
+#include <cstdint>
+#include <memory>
+
+#include "geometry/Shape.h"
+
+namespace crumble {
+
+using GrainId = std::int64_t;
+
+struct Material {
+  double density = 2650;          // kg/m³
+  double young = 100e9;           // Pa
+  double poisson = 0.15;
+  double friction = 0.5;          // grain–grain Coulomb coefficient
+  double wall_friction = 0.0;     // grain–wall
+  double rolling_friction = 0.05; // dimensionless (Bullet convention)
+  double restitution = 0.0;
+};
+
+// Per-grain strength, sampled once by the breakage model and inherited by children with
+// the Weibull size effect. `value` is model-specific (G_c in J/m² for peridynamics, a
+// strength in Pa for the stress criteria); `threshold_force` is the screening force (N).
+struct StrengthState {
+  double value = 0;
+  double threshold_force = 0;
+};
+
+struct Grain {
+  GrainId id = -1;
+  GrainId parent = -1;
+  int generation = 0;
+  Shape::Ptr shape;
+  int material = 0;
+  Vec3 position;       // of the centroid (= shape origin), world frame, m
+  Quat orientation;    // body → world
+  Vec3 velocity;       // m/s
+  Vec3 angular_velocity;  // rad/s, world frame
+  StrengthState strength;
+  int crush_count = 0;
+
+  double mass(double density) const { return density * shape->volume(); }
+  Vec3 to_world(const Vec3& local) const { return position + orientation.rotate(local); }
+  Vec3 to_local(const Vec3& world) const { return orientation.conjugate().rotate(world - position); }
+};
+
+}  // namespace crumble

@@ -1,0 +1,325 @@
+#include "core/Simulation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+#include <unordered_map>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace crumble {
+
+double Engine::max_stable_dt() const { return std::numeric_limits<double>::infinity(); }
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+}  // namespace
+
+bool Schedule::due(long step, double stress) {
+  bool d = false;
+  if (s_.every_steps > 0 && step % s_.every_steps == 0) d = true;
+  if (s_.every_stress > 0 && stress >= last_stress_ + s_.every_stress) {
+    // Advance by whole intervals so a jump in stress triggers one check, not many.
+    last_stress_ += s_.every_stress * std::floor((stress - last_stress_) / s_.every_stress);
+    d = true;
+  }
+  return d;
+}
+
+Simulation::Simulation(std::unique_ptr<Engine> engine, std::unique_ptr<BreakageModel> model,
+                       std::unique_ptr<FragmentBuilder> builder, EngineContext ctx,
+                       SimulationSettings settings, LoadingSettings loading, ScheduleSettings schedule,
+                       ScreeningSettings screening, std::uint64_t seed)
+    : engine_(std::move(engine)),
+      model_(std::move(model)),
+      builder_(std::move(builder)),
+      ctx_(std::move(ctx)),
+      settings_(std::move(settings)),
+      loading_(loading),
+      schedule_(schedule),
+      screening_(screening),
+      rng_(seed) {
+  if (!engine_) throw std::invalid_argument("Simulation needs an engine");
+  if (!model_) throw std::invalid_argument("Simulation needs a breakage model");
+  if (settings_.time_steps.empty()) throw std::invalid_argument("Simulation needs at least one time step rule");
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::set_container(const Container& c) {
+  container_ = c;
+  initial_height_ = c.height;
+  engine_->set_container(c);
+}
+
+GrainId Simulation::add_grain(Grain g) {
+  if (!g.shape) throw std::invalid_argument("grain without a shape");
+  if (g.shape->dimension() != ctx_.dimension)
+    throw std::invalid_argument("grain shape " + g.shape->describe() + " is " +
+                                std::to_string(g.shape->dimension()) + "D but the scenario is " +
+                                std::to_string(ctx_.dimension) + "D");
+  if (g.material < 0 || g.material >= static_cast<int>(ctx_.materials.size()))
+    throw std::invalid_argument("grain material index out of range");
+  g.id = next_id_++;
+  Rng r = rng_.derive(static_cast<std::uint64_t>(g.id));
+  model_->assign_strength(g, ctx_.materials[g.material], r);
+  engine_->add_grain(g);
+  grains_.push_back(std::move(g));
+  return grains_.back().id;
+}
+
+void Simulation::add_observer(std::shared_ptr<Observer> o) { observers_.push_back(std::move(o)); }
+
+double Simulation::area() const {
+  return ctx_.dimension == 2 ? container_.lx : container_.lx * container_.ly;
+}
+
+double Simulation::solid_volume() const {
+  double v = removed_volume_;
+  for (const auto& g : grains_) v += g.shape->volume();
+  return v;
+}
+
+double Simulation::time_step(double stress) const {
+  for (const auto& r : settings_.time_steps)
+    if (stress < r.below_stress) return r.dt;
+  return settings_.time_steps.back().dt;
+}
+
+void Simulation::sync_grains() { engine_->read_state(grains_); }
+
+RunState Simulation::state() const {
+  RunState s;
+  s.time = time_;
+  s.step = step_;
+  s.dt = dt_;
+  s.platen_force = engine_->platen_force();
+  s.floor_force = engine_->floor_force();
+  s.platen_stress = s.platen_force / area();
+  s.target_stress = loading_.target_stress(time_);
+  s.platen_height = engine_->platen_position();
+  s.axial_strain = initial_height_ > 0 ? (initial_height_ - s.platen_height) / initial_height_ : 0;
+  const double vs = solid_volume();
+  s.void_ratio = vs > 0 ? (area() * s.platen_height - vs) / vs : 0;
+  s.grains = grains_.size();
+  s.breakage_events = events_;
+  s.analyses = analyses_;
+  return s;
+}
+
+RunSummary Simulation::run(const Progress& progress) {
+  const auto t_start = Clock::now();
+  if (container_.height <= 0) throw std::logic_error("Simulation::run: no container set");
+  RunSummary sum;
+  sum.grains_initial = grains_.size();
+  for (const auto& g : grains_) sum.mass_initial += g.mass(ctx_.materials[g.material].density);
+  initial_height_ = engine_->platen_position();
+
+  RunState st = state();
+  sum.void_ratio_initial = st.void_ratio;
+  for (auto& o : observers_) o->on_start(*this, st);
+
+  dt_ = time_step(0);
+  {
+    const double bound = engine_->max_stable_dt();
+    if (dt_ > bound && !settings_.auto_reduce_dt)
+      throw std::invalid_argument("time step " + std::to_string(dt_) + " s exceeds the engine's stable step " +
+                                  std::to_string(bound) + " s (set simulation.auto_reduce_dt or a smaller dt)");
+  }
+  auto last_progress = Clock::now();
+  while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
+    if (settings_.max_steps > 0 && step_ >= settings_.max_steps) break;
+    double dt = time_step(std::max(st.platen_stress, 0.0));
+    const double bound = engine_->max_stable_dt();
+    if (dt > bound) {
+      if (!settings_.auto_reduce_dt)
+        throw std::runtime_error("time step exceeds the engine's stable step after breakage");
+      if (dt_reductions_ == 0 || dt_ != bound)
+        std::cerr << "warning: time step " << dt << " s reduced to the engine's stable step " << bound
+                  << " s at t = " << time_ << " s\n";
+      dt = bound;
+      ++dt_reductions_;
+    }
+    dt_ = dt;
+    engine_->set_platen(loading_.command(time_, area(), initial_height_));
+    auto t0 = Clock::now();
+    engine_->step(dt);
+    timings_.engine += seconds_since(t0);
+    time_ += dt;
+    ++step_;
+    st = state();
+    if (!std::isfinite(st.platen_force) || !std::isfinite(st.platen_height))
+      throw std::runtime_error("engine state became non-finite at step " + std::to_string(step_) +
+                               " (t = " + std::to_string(time_) + " s): the time step is too large for this scene");
+    sum.max_platen_stress = std::max(sum.max_platen_stress, st.platen_stress);
+    if (model_->active() && schedule_.due(step_, st.platen_stress)) {
+      check_breakage(st);
+      st = state();
+    }
+    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
+      t0 = Clock::now();
+      for (auto& o : observers_) o->on_sample(*this, st);
+      timings_.observers += seconds_since(t0);
+    }
+    if (progress && seconds_since(last_progress) > 1.0) {
+      last_progress = Clock::now();
+      progress(st, loading_.progress(time_, st.platen_stress, st.axial_strain));
+    }
+  }
+  st = state();
+  for (auto& o : observers_) o->on_sample(*this, st);
+  sync_grains();
+  sum.steps = step_;
+  sum.time = time_;
+  sum.grains_final = grains_.size();
+  for (const auto& g : grains_) sum.mass_final += g.mass(ctx_.materials[g.material].density);
+  sum.mass_removed = removed_mass_;
+  sum.void_ratio_final = st.void_ratio;
+  sum.breakage_events = events_;
+  sum.analyses = analyses_;
+  sum.fragment_fallbacks = fallbacks_;
+  sum.dt_reductions = dt_reductions_;
+  auto t0 = Clock::now();
+  for (auto& o : observers_) o->on_finish(*this, st, sum);
+  timings_.observers += seconds_since(t0);
+  sum.timings = timings_;
+  sum.wall_seconds = seconds_since(t_start);
+  return sum;
+}
+
+void Simulation::check_breakage(const RunState& st) {
+  auto t0 = Clock::now();
+  const std::vector<Contact> all = engine_->contacts();
+  engine_->read_state(grains_);
+  timings_.contacts += seconds_since(t0);
+
+  t0 = Clock::now();
+  std::unordered_map<GrainId, std::size_t> index;
+  for (std::size_t i = 0; i < grains_.size(); ++i) index[grains_[i].id] = i;
+  std::vector<std::vector<Contact>> on(grains_.size());
+  for (const auto& c : all) {
+    auto ia = index.find(c.a);
+    if (ia != index.end()) on[ia->second].push_back(c);
+    if (!c.is_wall()) {
+      auto ib = index.find(c.b);
+      if (ib != index.end()) {
+        Contact r = c;
+        std::swap(r.a, r.b);
+        r.normal = -c.normal;
+        r.force = -c.force;
+        on[ib->second].push_back(r);
+      }
+    }
+  }
+  std::vector<std::size_t> candidates;
+  for (std::size_t i = 0; i < grains_.size(); ++i)
+    if (screen(grains_[i], on[i], screening_).selected) candidates.push_back(i);
+  timings_.screening += seconds_since(t0);
+  if (candidates.empty()) return;
+
+  // Analyses and fragment building of different grains are independent: one grain per
+  // task. Results are stored by candidate index so the outcome does not depend on the
+  // number of threads.
+  t0 = Clock::now();
+  const long n = static_cast<long>(candidates.size());
+  std::vector<Analysis> results(n);
+  std::vector<FragmentResult> frags(n);
+  std::vector<std::string> errors(n);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(std::max(1, settings_.threads))
+  for (long k = 0; k < n; ++k) {
+    const std::size_t i = candidates[k];
+    try {
+      const Grain& g = grains_[i];
+      results[k] = model_->analyse(g, ctx_.materials[g.material], on[i]);
+      if (results[k].broken && results[k].fracture) {
+        if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
+        frags[k] = builder_->build(*g.shape, *results[k].fracture);
+      }
+    } catch (const std::exception& e) {
+      errors[k] = "grain " + std::to_string(grains_[i].id) + " (" + grains_[i].shape->describe() + "): " + e.what();
+    }
+  }
+  for (const auto& e : errors)
+    if (!e.empty()) throw std::runtime_error("breakage analysis failed for " + e);
+  timings_.analyses += seconds_since(t0);
+
+  t0 = Clock::now();
+  std::vector<char> remove(grains_.size(), 0);
+  std::vector<Grain> added;
+  for (long k = 0; k < n; ++k) {
+    const Grain& parent = grains_[candidates[k]];
+    ++analyses_;
+    AnalysisRecord rec{time_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
+                       results[k]};
+    rec.analysis.fracture.reset();
+    for (auto& o : observers_) o->on_analysis(*this, rec);
+    if (!results[k].broken || frags[k].children.size() < 2) continue;
+
+    const Material& mat = ctx_.materials[parent.material];
+    BreakageEvent ev;
+    ev.time = time_;
+    ev.platen_stress = st.platen_stress;
+    ev.parent = parent.id;
+    ev.parent_volume = parent.shape->volume();
+    ev.parent_diameter = parent.shape->equivalent_diameter();
+    ev.generation = parent.generation;
+    ev.fragment_method = frags[k].method;
+    ev.analysis = rec.analysis;
+    fallbacks_ += frags[k].fallbacks;
+    double vsum = 0;
+    for (const auto& f : frags[k].children) vsum += f.shape->volume();
+    if (std::abs(vsum - ev.parent_volume) > 1e-9 * ev.parent_volume)
+      throw std::runtime_error("fragment builder '" + builder_->name() + "' lost volume on grain " +
+                               std::to_string(parent.id) + ": children " + std::to_string(vsum) + " m³ vs parent " +
+                               std::to_string(ev.parent_volume) + " m³");
+    std::vector<Grain> children;
+    const Mat3 R = parent.orientation.matrix();
+    for (const auto& f : frags[k].children) {
+      const double d = f.shape->equivalent_diameter();
+      if (d < settings_.fines_diameter) {
+        ev.removed_volume += f.shape->volume();
+        continue;
+      }
+      Grain c;
+      c.id = next_id_++;
+      c.parent = parent.id;
+      c.generation = parent.generation + 1;
+      c.shape = f.shape;
+      c.material = parent.material;
+      const Vec3 r = R * f.offset;
+      c.position = parent.position + r;
+      c.orientation = parent.orientation;
+      c.velocity = parent.velocity + cross(parent.angular_velocity, r);  // v + ω × (c_child − c_parent)
+      c.angular_velocity = parent.angular_velocity;
+      Rng rr = rng_.derive(static_cast<std::uint64_t>(c.id));
+      model_->inherit_strength(parent, c, mat, rr);
+      ev.children.push_back(c.id);
+      ev.child_volumes.push_back(f.shape->volume());
+      ev.child_diameters.push_back(d);
+      children.push_back(std::move(c));
+    }
+    removed_volume_ += ev.removed_volume;
+    removed_mass_ += ev.removed_volume * mat.density;
+    engine_->replace_grain(parent.id, children);
+    remove[candidates[k]] = 1;
+    for (auto& c : children) added.push_back(std::move(c));
+    ++events_;
+    for (auto& o : observers_) o->on_breakage(*this, ev);
+  }
+  std::vector<Grain> kept;
+  kept.reserve(grains_.size() + added.size());
+  for (std::size_t i = 0; i < grains_.size(); ++i)
+    if (!remove[i]) kept.push_back(std::move(grains_[i]));
+  for (auto& c : added) kept.push_back(std::move(c));
+  grains_ = std::move(kept);
+  timings_.fragments += seconds_since(t0);
+}
+
+}  // namespace crumble

@@ -1,0 +1,109 @@
+// The one loop of DESIGN.md: load, step, check breakage on schedule, replace broken
+// grains by their fragments, notify observers.
+#pragma once
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "core/BreakageModel.h"
+#include "core/Engine.h"
+#include "core/FragmentBuilder.h"
+#include "core/Loading.h"
+#include "core/Observer.h"
+#include "core/Screening.h"
+
+namespace crumble {
+
+// Breakage checks every `every_stress` Pa of platen stress (seeds/000: 0.08 MPa) and/or
+// every `every_steps` steps; 0 disables a rule.
+struct ScheduleSettings {
+  double every_stress = 0;
+  long every_steps = 0;
+};
+
+class Schedule {
+ public:
+  explicit Schedule(ScheduleSettings s) : s_(s) {}
+  bool due(long step, double stress);
+  const ScheduleSettings& settings() const { return s_; }
+
+ private:
+  ScheduleSettings s_;
+  double last_stress_ = 0;
+};
+
+struct TimeStepRule {
+  double below_stress;  // Pa: applies while the measured stress is below this
+  double dt;            // s
+};
+
+struct SimulationSettings {
+  // seeds/000 §5: dt by stress level; the last rule applies above all bounds.
+  std::vector<TimeStepRule> time_steps{{1e300, 5e-5}};
+  long max_steps = 0;                 // 0 = no limit (the loading decides)
+  long sample_every = 100;            // steps between series samples
+  double fines_diameter = 0;          // m: children smaller than this leave the engine
+  bool auto_reduce_dt = true;         // shrink dt (with a warning) below the engine's bound
+  int threads = 1;
+};
+
+class Simulation {
+ public:
+  Simulation(std::unique_ptr<Engine> engine, std::unique_ptr<BreakageModel> model,
+             std::unique_ptr<FragmentBuilder> builder, EngineContext ctx, SimulationSettings settings,
+             LoadingSettings loading, ScheduleSettings schedule, ScreeningSettings screening,
+             std::uint64_t seed);
+  ~Simulation();
+
+  void set_container(const Container& c);
+  // Adds a grain of the initial packing: assigns its id and samples its strength.
+  GrainId add_grain(Grain g);
+  void add_observer(std::shared_ptr<Observer> o);
+
+  using Progress = std::function<void(const RunState&, double fraction)>;
+  RunSummary run(const Progress& progress = {});
+
+  const std::vector<Grain>& grains() const { return grains_; }
+  const Engine& engine() const { return *engine_; }
+  Engine& engine() { return *engine_; }
+  const BreakageModel& model() const { return *model_; }
+  const FragmentBuilder* builder() const { return builder_.get(); }
+  const EngineContext& context() const { return ctx_; }
+  const Container& container() const { return container_; }
+  const SimulationSettings& settings() const { return settings_; }
+  const Loading& loading() const { return loading_; }
+  double solid_volume() const;  // in the engine + removed fines
+  double removed_volume() const { return removed_volume_; }
+  RunState state() const;
+  // Pull poses from the engine into grains() (observers that draw or measure call this).
+  void sync_grains();
+
+ private:
+  double area() const;
+  double time_step(double stress) const;
+  void check_breakage(const RunState& st);
+  std::unique_ptr<Engine> engine_;
+  std::unique_ptr<BreakageModel> model_;
+  std::unique_ptr<FragmentBuilder> builder_;
+  EngineContext ctx_;
+  SimulationSettings settings_;
+  Loading loading_;
+  Schedule schedule_;
+  ScreeningSettings screening_;
+  Rng rng_;
+  Container container_;
+  std::vector<Grain> grains_;
+  std::vector<std::shared_ptr<Observer>> observers_;
+  GrainId next_id_ = 0;
+  double time_ = 0;
+  long step_ = 0;
+  double dt_ = 0;
+  double removed_volume_ = 0;
+  double removed_mass_ = 0;
+  double initial_height_ = 0;
+  long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
+  Timings timings_;
+};
+
+}  // namespace crumble

@@ -1,0 +1,72 @@
+#include "scenarios/Registry.h"
+
+#include "crumble_config.h"
+
+#include "breakage/none/NoBreakage.h"
+
+namespace crumble {
+
+template <class F>
+void Table<F>::add(RegistryEntry<F> e) {
+  for (auto& x : entries_)
+    if (x.name == e.name) throw std::invalid_argument(seam_ + " '" + e.name + "' is registered twice");
+  entries_.push_back(std::move(e));
+}
+
+template <class F>
+std::string Table<F>::names() const {
+  std::string s;
+  for (const auto& e : entries_) s += (s.empty() ? "" : ", ") + e.name;
+  return s;
+}
+
+template <class F>
+const RegistryEntry<F>& Table<F>::find(const std::string& name, const std::string& where) const {
+  for (const auto& e : entries_)
+    if (e.name == name) return e;
+  const std::string why = not_compiled_reason(seam_, name);
+  if (!why.empty()) throw ConfigError(where, "'" + name + "' is not available in this build: " + why);
+  throw ConfigError(where, "unknown " + seam_ + " '" + name + "'; known: " + names());
+}
+
+template class Table<EngineFactory>;
+template class Table<ModelFactory>;
+template class Table<BuilderFactory>;
+
+// ---- The explicit registration tables. Adding an implementation = one line here. ----
+
+Table<EngineFactory>& engines() {
+  static Table<EngineFactory> t = [] {
+    Table<EngineFactory> t("engine");
+    return t;
+  }();
+  return t;
+}
+
+Table<ModelFactory>& breakage_models() {
+  static Table<ModelFactory> t = [] {
+    Table<ModelFactory> t("breakage model");
+    t.add({"none", "grains never break (rigid runs)",
+           [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}});
+    return t;
+  }();
+  return t;
+}
+
+Table<BuilderFactory>& fragment_builders() {
+  static Table<BuilderFactory> t = [] {
+    Table<BuilderFactory> t("fragment builder");
+    return t;
+  }();
+  return t;
+}
+
+std::string not_compiled_reason(const std::string& seam, const std::string& name) {
+  if (seam == "engine" && name == "bullet" && !CRUMBLE_WITH_BULLET) return "built with CRUMBLE_WITH_BULLET=OFF";
+  if (seam == "engine" && name == "ode" && !CRUMBLE_WITH_ODE) return "built with CRUMBLE_WITH_ODE=OFF";
+  if (seam == "fragment builder" && name == "alpha_shape" && !CRUMBLE_WITH_CGAL)
+    return "built with CRUMBLE_WITH_CGAL=OFF";
+  return "";
+}
+
+}  // namespace crumble

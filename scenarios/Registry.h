@@ -1,0 +1,53 @@
+// The three registration tables (DESIGN.md "Registry and plugins"): the name in the
+// scenario JSON is the name in the table. Built-in entries are listed explicitly in
+// Registry.cpp; plugins add theirs at run time through `add`.
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/BreakageModel.h"
+#include "core/Config.h"
+#include "core/Engine.h"
+#include "core/FragmentBuilder.h"
+
+namespace crumble {
+
+using EngineFactory = std::function<std::unique_ptr<Engine>(const Config&, const EngineContext&)>;
+using ModelFactory = std::function<std::unique_ptr<BreakageModel>(const Config&, const EngineContext&)>;
+using BuilderFactory = std::function<std::unique_ptr<FragmentBuilder>(const Config&, const EngineContext&)>;
+
+template <class Factory>
+struct RegistryEntry {
+  std::string name;
+  std::string description;
+  Factory make;
+  std::vector<std::string> variants;  // e.g. the criteria of the stress model
+  std::vector<int> dimensions{3};     // which scenario dimensions it supports
+};
+
+template <class Factory>
+class Table {
+ public:
+  explicit Table(std::string seam) : seam_(std::move(seam)) {}
+  void add(RegistryEntry<Factory> e);
+  // Throws ConfigError at `where` naming the known entries when `name` is not registered.
+  const RegistryEntry<Factory>& find(const std::string& name, const std::string& where) const;
+  const std::vector<RegistryEntry<Factory>>& entries() const { return entries_; }
+  std::string names() const;
+
+ private:
+  std::string seam_;
+  std::vector<RegistryEntry<Factory>> entries_;
+};
+
+Table<EngineFactory>& engines();
+Table<ModelFactory>& breakage_models();
+Table<BuilderFactory>& fragment_builders();
+
+// Names known to the design but not compiled into this binary, with the reason
+// (e.g. "bullet: built with CRUMBLE_WITH_BULLET=OFF"), so the error can say so.
+std::string not_compiled_reason(const std::string& seam, const std::string& name);
+
+}  // namespace crumble
