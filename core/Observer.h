@@ -66,6 +66,7 @@ struct RunSummary {
   double max_platen_stress = 0;
   Timings timings;
   std::map<std::string, double> extra;  // method-specific figures
+  std::map<std::string, std::vector<double>> extra_arrays;
 };
 
 class Observer {

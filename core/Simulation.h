@@ -45,6 +45,7 @@ struct SimulationSettings {
   long sample_every = 100;            // steps between series samples
   double fines_diameter = 0;          // m: children smaller than this leave the engine
   bool auto_reduce_dt = true;         // shrink dt (with a warning) below the engine's bound
+  long stop_after_breakage_events = 0;  // 0 = never (single-grain crushing stops at 1)
   int threads = 1;
 };
 

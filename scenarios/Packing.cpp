@@ -1,0 +1,270 @@
+#include "scenarios/Packing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <unordered_map>
+
+#include "scenarios/ShapeSpec.h"
+
+namespace crumble {
+
+using Json = nlohmann::json;
+
+std::vector<double> sample_psd(const std::vector<PsdPoint>& psd, std::size_t count, Rng& rng) {
+  if (psd.size() < 2) throw std::invalid_argument("PSD needs at least two points");
+  std::vector<double> w;  // number weight per bin
+  for (std::size_t i = 1; i < psd.size(); ++i) {
+    const double f = psd[i].passing - psd[i - 1].passing;
+    const double dm = 0.5 * (psd[i].diameter + psd[i - 1].diameter);
+    w.push_back(f / (dm * dm * dm));
+  }
+  double tot = 0;
+  for (double x : w) tot += x;
+  std::vector<double> out;
+  out.reserve(count);
+  for (std::size_t n = 0; n < count; ++n) {
+    double u = rng.uniform() * tot;
+    std::size_t b = 0;
+    while (b + 1 < w.size() && u > w[b]) u -= w[b++];
+    out.push_back(rng.uniform(psd[b].diameter, psd[b + 1].diameter));
+  }
+  return out;
+}
+
+namespace {
+
+Quat random_orientation(Rng& rng, int dim) {
+  if (dim == 2) return Quat::from_axis_angle({0, 0, 1}, rng.uniform(0, 2 * kPi));
+  // Shoemake's uniform random rotation.
+  const double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+  return Quat{std::sqrt(1 - u1) * std::sin(2 * kPi * u2), std::sqrt(1 - u1) * std::cos(2 * kPi * u2),
+              std::sqrt(u1) * std::sin(2 * kPi * u3), std::sqrt(u1) * std::cos(2 * kPi * u3)}
+      .normalized();
+}
+
+double bounding_radius(const Shape& s) {
+  const Aabb b = s.bounds();
+  return norm(cwise_max(cwise_max(b.hi, -b.lo), Vec3{0, 0, 0}));
+}
+
+Json scaled_spec(const Json& tmpl, double factor) {
+  Json j = tmpl;
+  j["scale"] = j.value("scale", 1.0) * factor;
+  return j;
+}
+
+}  // namespace
+
+PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng& rng) {
+  PackingSpec spec;
+  spec.type = pc.choice("type", "cloud", {"cloud", "grains", "file"});
+  spec.container.lx = cc.positive("lx");
+  spec.container.ly = dim == 3 ? cc.positive("ly") : cc.number("ly", 0.0, 0.0, 0.0);
+  spec.container.platen_mass = cc.number("platen_mass", 0.0, 0.0);
+  const bool height_given = cc.has("height");
+  if (height_given) spec.container.height = cc.positive("height");
+
+  if (spec.type == "cloud") {
+    const long count = pc.integer("count", 100, 1, 10000000);
+    std::vector<PsdPoint> psd;
+    const auto& pj = pc.raw("psd");
+    if (!pj.is_array() || pj.size() < 2) pc.fail("psd", "expected at least two [diameter_m, fraction_passing] pairs");
+    for (std::size_t i = 0; i < pj.size(); ++i) {
+      const std::string where = "psd/" + std::to_string(i);
+      if (!pj[i].is_array() || pj[i].size() != 2 || !pj[i][0].is_number() || !pj[i][1].is_number())
+        pc.fail(where, "expected [diameter_m, fraction_passing]");
+      PsdPoint p{pj[i][0].get<double>(), pj[i][1].get<double>()};
+      if (!(p.diameter > 0) || !std::isfinite(p.diameter)) pc.fail(where + "/0", "diameter must be > 0");
+      if (!(p.passing >= 0 && p.passing <= 1)) pc.fail(where + "/1", "fraction passing must be in [0, 1]");
+      if (i > 0 && (p.diameter <= psd.back().diameter || p.passing < psd.back().passing))
+        pc.fail(where, "PSD must increase in diameter and not decrease in fraction passing");
+      psd.push_back(p);
+    }
+    if (psd.back().passing != 1.0) pc.fail("psd", "the last point must have fraction passing 1");
+    Config sc = pc.child("shape");
+    const Shape::Ptr tmpl = shape_from_config(sc, dim, /*unit_size=*/true);
+    const Json tmpl_json = sc.doc();
+    const double fill = pc.number("fill_fraction", dim == 3 ? 0.2 : 0.35, 0.01, 0.5);
+    const int material = static_cast<int>(pc.integer("material", 0, 0));
+    Config st = pc.child("settle");
+    spec.settle = true;
+    spec.settle_settings.stress = st.number("stress", 10e3, 0.0);
+    spec.settle_settings.max_steps = st.integer("max_steps", 20000, 1);
+    spec.settle_settings.dt = st.number("dt", 0.0, 0.0);
+    spec.settle_settings.tolerance = st.positive("tolerance", 1e-4);
+    spec.settle_settings.window = st.integer("window", 200, 1);
+
+    const auto diam = sample_psd(psd, static_cast<std::size_t>(count), rng);
+    double vs = 0;
+    std::vector<Shape::Ptr> shapes;
+    std::unordered_map<long, Shape::Ptr> cache;  // identical sizes share a Shape
+    for (double d : diam) {
+      const double f = d / tmpl->equivalent_diameter();
+      shapes.push_back(tmpl->scaled(f));
+      vs += shapes.back()->volume();
+    }
+    const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
+    const double cloud_h = vs / (fill * area);
+    if (!height_given) spec.container.height = cloud_h;
+    // Random sequential addition without overlap of bounding spheres, largest first.
+    std::vector<std::size_t> order(shapes.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return diam[a] > diam[b]; });
+    std::vector<Vec3> pos(shapes.size());
+    std::vector<double> rad(shapes.size());
+    std::vector<std::size_t> placed;
+    const double top = spec.container.height;
+    for (std::size_t k : order) {
+      const double r = bounding_radius(*shapes[k]) * 1.01;
+      rad[k] = r;
+      if (2 * r > spec.container.lx || (dim == 3 && 2 * r > spec.container.ly) || 2 * r > top)
+        pc.fail("count", "a grain of diameter " + std::to_string(diam[k]) + " m does not fit in the container");
+      bool ok = false;
+      for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
+        Vec3 p{rng.uniform(r, spec.container.lx - r), 0, 0};
+        if (dim == 3) {
+          p.y = rng.uniform(r, spec.container.ly - r);
+          p.z = rng.uniform(r, top - r);
+        } else {
+          p.y = rng.uniform(r, top - r);
+        }
+        ok = true;
+        for (std::size_t q : placed)
+          if (norm2(p - pos[q]) < (r + rad[q]) * (r + rad[q])) {
+            ok = false;
+            break;
+          }
+        if (ok) pos[k] = p;
+      }
+      if (!ok)
+        pc.fail("fill_fraction", "could not place " + std::to_string(count) +
+                                     " grains without overlap; lower fill_fraction or give a taller container.height");
+      placed.push_back(k);
+    }
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      PlacedGrain g;
+      g.shape = shapes[i];
+      g.shape_spec = scaled_spec(tmpl_json, diam[i] / tmpl->equivalent_diameter());
+      g.position = pos[i];
+      g.orientation = random_orientation(rng, dim);
+      g.material = material;
+      spec.grains.push_back(std::move(g));
+    }
+    return spec;
+  }
+
+  if (spec.type == "grains" || spec.type == "file") {
+    Json loaded;
+    std::vector<Config> entries;
+    std::unique_ptr<Json> file_doc;
+    std::unique_ptr<Config> file_cfg;
+    if (spec.type == "file") {
+      const std::string path = pc.string("path");
+      std::ifstream in(path);
+      if (!in) pc.fail("path", "cannot open packing file '" + path + "'");
+      std::stringstream ss;
+      ss << in.rdbuf();
+      file_doc = std::make_unique<Json>(parse_json_text(ss.str(), path));
+      file_cfg = std::make_unique<Config>(*file_doc);
+      entries = file_cfg->children("grains");
+      if (file_cfg->has("container")) {
+        Config fc = file_cfg->child("container");
+        if (!height_given) spec.container.height = fc.positive("height");
+        fc.number("lx", 0);
+        fc.number("ly", 0);
+        fc.number("platen_mass", 0);
+      }
+      file_cfg->integer("dimension", dim, dim, dim);
+      file_cfg->check_unknown();
+    } else {
+      entries = pc.children("grains");
+      spec.settle = pc.boolean("settle", false);
+    }
+    if (entries.empty()) pc.fail(spec.type == "file" ? "path" : "grains", "the packing has no grains");
+    if (spec.container.height <= 0) cc.fail("height", "required for an explicit packing");
+    for (auto& e : entries) {
+      PlacedGrain g;
+      Config sc = e.required_child("shape");
+      g.shape = shape_from_config(sc, dim);
+      g.shape_spec = sc.doc();
+      const Vec3 p = e.vec3("position", {0, 0, 0});
+      if (!is_finite(p)) e.fail("position", "must be finite");
+      g.position = p;
+      auto q = e.numbers("orientation", {1, 0, 0, 0});
+      if (q.size() != 4) e.fail("orientation", "expected a quaternion [w, x, y, z]");
+      const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+      if (!(n > 0)) e.fail("orientation", "quaternion must be non-zero");
+      g.orientation = Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
+      g.material = static_cast<int>(e.integer("material", 0, 0));
+      spec.grains.push_back(std::move(g));
+    }
+    if (spec.type == "file" && file_cfg) file_cfg->check_unknown();
+    return spec;
+  }
+  return spec;
+}
+
+long build_packing(Simulation& sim, const PackingSpec& spec) {
+  sim.set_container(spec.container);
+  for (const auto& pg : spec.grains) {
+    Grain g;
+    g.shape = pg.shape;
+    g.position = pg.position;
+    g.orientation = pg.orientation;
+    g.material = pg.material;
+    sim.add_grain(std::move(g));
+  }
+  if (!spec.settle) return 0;
+  // seeds/000 §5: push the cloud down with a plate under a small force until stable.
+  Engine& e = sim.engine();
+  const auto& ss = spec.settle_settings;
+  const double area = sim.context().dimension == 2 ? spec.container.lx : spec.container.lx * spec.container.ly;
+  double dt = ss.dt > 0 ? ss.dt : sim.settings().time_steps.front().dt;
+  dt = std::min(dt, e.max_stable_dt());
+  double dmean = 0;
+  for (const auto& g : sim.grains()) dmean += g.shape->equivalent_diameter();
+  dmean /= std::max<std::size_t>(1, sim.grains().size());
+  double last = e.platen_position();
+  long steps = 0;
+  e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
+  while (steps < ss.max_steps) {
+    e.step(dt);
+    ++steps;
+    if (steps % ss.window == 0) {
+      const double z = e.platen_position();
+      if (!std::isfinite(z)) throw std::runtime_error("packing settlement became non-finite");
+      const bool loaded = e.platen_force() > 0.5 * ss.stress * area;
+      if (loaded && std::abs(last - z) < ss.tolerance * dmean) break;
+      last = z;
+    }
+  }
+  e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
+  sim.sync_grains();
+  return steps;
+}
+
+Json packing_to_json(const Simulation& sim, const PackingSpec& spec) {
+  Json j;
+  j["dimension"] = sim.context().dimension;
+  j["container"] = {{"lx", spec.container.lx},
+                    {"ly", spec.container.ly},
+                    {"height", sim.engine().platen_position()},
+                    {"platen_mass", spec.container.platen_mass}};
+  Json gs = Json::array();
+  std::unordered_map<const Shape*, const Json*> specs;
+  for (const auto& pg : spec.grains) specs[pg.shape.get()] = &pg.shape_spec;
+  for (const auto& g : sim.grains()) {
+    auto it = specs.find(g.shape.get());
+    if (it == specs.end()) continue;  // fragments have no analytic spec
+    gs.push_back({{"shape", *it->second},
+                  {"position", {g.position.x, g.position.y, g.position.z}},
+                  {"orientation", {g.orientation.w, g.orientation.x, g.orientation.y, g.orientation.z}},
+                  {"material", g.material}});
+  }
+  j["grains"] = gs;
+  return j;
+}
+
+}  // namespace crumble

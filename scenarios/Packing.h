@@ -1,0 +1,58 @@
+// Packings are data: generated (a cloud drawn from a PSD, pushed down by the platen until
+// stable, seeds/000 §5), listed explicitly, or loaded from a packing.json written by an
+// earlier run, so different engines and models start from the identical packing.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/Config.h"
+#include "core/Simulation.h"
+
+namespace crumble {
+
+struct PsdPoint {
+  double diameter;  // m
+  double passing;   // fraction by mass in [0, 1]
+};
+
+// Draw `count` equivalent diameters whose mass distribution follows the PSD (number
+// density within each bin ∝ mass fraction / d³, uniform in d inside a bin).
+std::vector<double> sample_psd(const std::vector<PsdPoint>& psd, std::size_t count, Rng& rng);
+
+struct PlacedGrain {
+  Shape::Ptr shape;
+  nlohmann::json shape_spec;  // to save the packing
+  Vec3 position;
+  Quat orientation;
+  int material = 0;
+};
+
+struct SettleSettings {
+  double stress = 10e3;       // Pa pushed by the platen while settling
+  long max_steps = 20000;
+  double dt = 0;              // s; 0 = the scenario's first time step
+  double tolerance = 1e-4;    // platen travel per check window relative to mean diameter
+  long window = 200;          // steps between checks
+};
+
+struct PackingSpec {
+  std::string type;  // "cloud" | "grains" | "file"
+  std::vector<PlacedGrain> grains;
+  bool settle = false;
+  SettleSettings settle_settings;
+  Container container;
+};
+
+// Reads the "packing" and "container" objects; for "cloud" draws the grains now.
+PackingSpec packing_from_config(const Config& packing, const Config& container, int dimension, Rng& rng);
+
+// Adds the grains to the simulation and, for generated clouds, pushes the platen down until
+// the packing is stable (the initial state of the run). Returns the settling steps.
+long build_packing(Simulation& sim, const PackingSpec& spec);
+
+// packing.json of the current grains (shape specs, poses) for reuse by another scenario.
+nlohmann::json packing_to_json(const Simulation& sim, const PackingSpec& spec);
+
+}  // namespace crumble

@@ -1,0 +1,174 @@
+#include "scenarios/ScenarioFactory.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "scenarios/Registry.h"
+
+namespace crumble {
+
+using Json = nlohmann::json;
+
+Json load_scenario_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, "cannot open scenario file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_json_text(ss.str(), path);
+}
+
+namespace {
+
+std::vector<Material> materials_from(const Config& root) {
+  std::vector<Material> out;
+  auto list = root.children("materials");
+  if (list.empty()) {
+    // No "materials": one default material (seeds/000 Table 1), recorded in the effective scenario.
+    Json& doc = const_cast<Json&>(root.doc());
+    doc["materials"] = Json::array({Json::object()});
+    list = root.children("materials");
+  }
+  for (auto& m : list) {
+    Material mat;
+    mat.density = m.positive("density", mat.density);
+    mat.young = m.positive("young", mat.young);
+    mat.poisson = m.number("poisson", mat.poisson, -0.99, 0.5);
+    mat.friction = m.number("friction", mat.friction, 0.0);
+    mat.wall_friction = m.number("wall_friction", mat.wall_friction, 0.0);
+    mat.rolling_friction = m.number("rolling_friction", mat.rolling_friction, 0.0);
+    mat.restitution = m.number("restitution", mat.restitution, 0.0, 1.0);
+    out.push_back(mat);
+  }
+  return out;
+}
+
+std::vector<TimeStepRule> time_steps_from(const Config& root) {
+  std::vector<TimeStepRule> rules;
+  const Json& d = root.doc();
+  if (d.contains("time_step") && d["time_step"].is_array()) {
+    for (auto& r : root.children("time_step")) {
+      TimeStepRule t{r.number("below_stress", 1e300), r.positive("dt")};
+      if (!rules.empty() && t.below_stress <= rules.back().below_stress)
+        r.fail("below_stress", "time-step rules must have increasing below_stress");
+      rules.push_back(t);
+    }
+    if (rules.empty()) root.fail("time_step", "needs at least one {below_stress, dt} rule");
+  } else {
+    rules.push_back({1e300, root.positive("time_step", 5e-5)});
+  }
+  return rules;
+}
+
+}  // namespace
+
+Scenario build_scenario(Json doc, const BuildOptions& opt) {
+  for (const auto& o : opt.overrides) apply_override(doc, o);
+  if (!doc.is_object()) throw ConfigError(opt.source_name, "a scenario must be a JSON object");
+  Scenario sc;
+  Config root(doc);
+  sc.name = root.string("name", "scenario");
+  root.string("description", "");
+  const int dim = static_cast<int>(root.integer("dimension", 3, 2, 3));
+  if (opt.seed) doc["seed"] = *opt.seed;
+  if (opt.threads) doc["threads"] = *opt.threads;
+  sc.seed = static_cast<std::uint64_t>(root.integer("seed", 1, 0));
+  sc.threads = static_cast<int>(root.integer("threads", 1, 1, 1024));
+
+  EngineContext ctx;
+  ctx.dimension = dim;
+  ctx.gravity = root.vec3("gravity", dim == 3 ? Vec3{0, 0, -9.81} : Vec3{0, -9.81, 0});
+  ctx.materials = materials_from(root);
+  ctx.threads = sc.threads;
+  ctx.seed = sc.seed;
+
+  // The packing first: its errors do not depend on which engine is chosen.
+  Rng packing_rng = Rng(sc.seed).derive(0xC10D);
+  sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
+
+  auto check_dim = [&](const auto& entry, const Config& c) {
+    for (int d : entry.dimensions)
+      if (d == dim) return;
+    c.fail("type", "'" + entry.name + "' does not support " + std::to_string(dim) + "D scenarios");
+  };
+
+  Config ec = root.child("engine");
+  const std::string et = ec.string("type", "bullet");
+  const auto& eentry = engines().find(et, "/engine/type");
+  check_dim(eentry, ec);
+  Config bc = root.child("breakage");
+  const std::string bt = bc.string("type", "none");
+  const auto& bentry = breakage_models().find(bt, "/breakage/type");
+  check_dim(bentry, bc);
+  std::unique_ptr<FragmentBuilder> builder;
+  std::string ft = "none";
+  if (bt != "none" || root.doc().contains("fragments")) {
+    Config fc = root.child("fragments");
+    ft = fc.string("type", dim == 3 ? "alpha_shape" : "level_set");
+    const auto& fentry = fragment_builders().find(ft, "/fragments/type");
+    check_dim(fentry, fc);
+    builder = fentry.make(fc, ctx);
+  }
+  auto engine = eentry.make(ec, ctx);
+  auto model = bentry.make(bc, ctx);
+  sc.engine_name = et;
+  sc.breakage_name = bt;
+  sc.fragments_name = ft;
+
+  SimulationSettings ss;
+  ss.time_steps = time_steps_from(root);
+  Config simc = root.child("simulation");
+  ss.max_steps = simc.integer("max_steps", 0, 0);
+  ss.sample_every = simc.integer("sample_every", 100, 1);
+  ss.fines_diameter = simc.number("fines_diameter", 0.0, 0.0);
+  ss.auto_reduce_dt = simc.boolean("auto_reduce_dt", true);
+  ss.stop_after_breakage_events = simc.integer("stop_after_breakage_events", 0, 0);
+  ss.threads = sc.threads;
+
+  LoadingSettings ls;
+  Config lc = root.child("loading");
+  ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate"});
+  if (ls.mode == "stress_ramp") {
+    ls.max_stress = lc.positive("max_stress", 1e6);
+    ls.ramp_time = lc.positive("ramp_time", 0.1);
+    ls.hold_time = lc.number("hold_time", 0.0, 0.0);
+    ls.initial_stress = lc.number("initial_stress", 0.0, 0.0);
+  } else {
+    ls.strain_rate = lc.positive("strain_rate", 0.1);
+  }
+  ls.stop_stress = lc.number("stop_stress", 0.0, 0.0);
+  ls.stop_force = lc.number("stop_force", 0.0, 0.0);
+  ls.stop_strain = lc.number("stop_strain", 0.0, 0.0, 1.0);
+  if (ls.mode == "strain_rate" && ls.stop_stress == 0 && ls.stop_force == 0 && ls.stop_strain == 0 &&
+      ss.max_steps == 0 && ss.stop_after_breakage_events == 0)
+    lc.fail("mode", "strain_rate loading needs a stop: stop_stress, stop_force, stop_strain, "
+                    "simulation.max_steps or simulation.stop_after_breakage_events");
+
+  ScheduleSettings sch;
+  Config schc = root.child("schedule");
+  sch.every_stress = schc.number("every_stress", 0.08e6, 0.0);
+  sch.every_steps = schc.integer("every_steps", 0, 0);
+
+  ScreeningSettings scr;
+  Config scrc = root.child("screening");
+  scr.min_diameter = scrc.number("min_diameter", scr.min_diameter, 0.0);
+  scr.force_threshold = scrc.boolean("force_threshold", scr.force_threshold);
+  scr.max_unbalanced_force_ratio = scrc.number("max_unbalanced_force_ratio", scr.max_unbalanced_force_ratio);
+  scr.max_unbalanced_moment_ratio = scrc.number("max_unbalanced_moment_ratio", scr.max_unbalanced_moment_ratio);
+  scr.min_contacts = static_cast<int>(scrc.integer("min_contacts", scr.min_contacts, 1));
+
+  Config oc = root.child("output");
+  sc.output.series_every = oc.integer("series_every", 0, 0);
+  sc.output.psd_at_stress = oc.numbers("psd_at_stress", {});
+  sc.output.vtk_every = oc.integer("vtk_every", 0, 0);
+  sc.output.vtk_final = oc.boolean("vtk_final", true);
+  if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
+
+
+  root.check_unknown();
+  sc.sim = std::make_unique<Simulation>(std::move(engine), std::move(model), std::move(builder), ctx, ss, ls, sch,
+                                        scr, sc.seed);
+  sc.effective = doc;
+  return sc;
+}
+
+}  // namespace crumble

@@ -1,0 +1,46 @@
+// JSON scenario → Simulation with its observers (the composition root).
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/Simulation.h"
+#include "scenarios/Packing.h"
+
+namespace crumble {
+
+struct OutputSettings {
+  long series_every = 0;                 // steps between series rows (0 = simulation.sample_every)
+  std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
+  long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
+  bool vtk_final = true;                 // write the final state as VTK
+};
+
+struct Scenario {
+  std::string name;
+  nlohmann::json effective;    // the scenario with every default filled in
+  std::unique_ptr<Simulation> sim;
+  PackingSpec packing;
+  OutputSettings output;
+  std::uint64_t seed = 1;
+  int threads = 1;
+  std::string engine_name, breakage_name, fragments_name;
+};
+
+struct BuildOptions {
+  std::vector<std::string> overrides;  // --set path=value
+  std::optional<std::uint64_t> seed;
+  std::optional<int> threads;
+  std::string source_name = "scenario";
+};
+
+// Reads a scenario file (errors name the file and JSON path).
+nlohmann::json load_scenario_file(const std::string& path);
+
+// Builds everything (engine, model, builder, packing spec) and checks for unknown keys.
+// Throws ConfigError for any input problem.
+Scenario build_scenario(nlohmann::json doc, const BuildOptions& opt);
+
+}  // namespace crumble

@@ -1,0 +1,156 @@
+#include "scenarios/ShapeSpec.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace crumble {
+
+namespace {
+
+ShapeResolution resolution_from(const Config& c) {
+  ShapeResolution r;
+  if (!c.is_object("resolution") && !c.has("resolution")) return r;
+  Config rc = c.child("resolution");
+  r.mesh_subdivisions = static_cast<int>(rc.integer("mesh_subdivisions", r.mesh_subdivisions, 0, 6));
+  r.level_set_spacing = rc.number("level_set_spacing", 0.0, 0.0);
+  r.surface_nodes = static_cast<int>(rc.integer("surface_nodes", 0, 0, 10000000));
+  return r;
+}
+
+std::vector<Vec3> point_list(const Config& c, const std::string& key, int dims) {
+  const auto& j = c.raw(key);
+  if (!j.is_array()) c.fail(key, "expected an array of points");
+  std::vector<Vec3> out;
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    const auto& p = j[i];
+    const std::string where = key + "/" + std::to_string(i);
+    if (!p.is_array() || static_cast<int>(p.size()) != dims)
+      c.fail(where, "expected an array of " + std::to_string(dims) + " numbers");
+    Vec3 v;
+    for (int k = 0; k < dims; ++k) {
+      if (!p[k].is_number()) c.fail(where, "expected numbers");
+      v[k] = p[k].get<double>();
+      if (!std::isfinite(v[k])) c.fail(where, "expected finite numbers");
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+template <class F>
+Shape::Ptr guarded(const Config& c, F&& f) {
+  try {
+    return f();
+  } catch (const std::invalid_argument& e) {
+    c.fail("", std::string("invalid shape: ") + e.what());
+  }
+}
+
+}  // namespace
+
+TriMesh read_obj(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot open mesh file '" + path + "'");
+  TriMesh m;
+  std::string line;
+  int ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    std::istringstream is(line);
+    std::string tag;
+    if (!(is >> tag)) continue;
+    if (tag == "v") {
+      Vec3 v;
+      if (!(is >> v.x >> v.y >> v.z) || !is_finite(v))
+        throw std::invalid_argument(path + ":" + std::to_string(ln) + ": malformed vertex line");
+      m.vertices.push_back(v);
+    } else if (tag == "f") {
+      std::vector<int> idx;
+      std::string tok;
+      while (is >> tok) {
+        const auto slash = tok.find('/');
+        int k = 0;
+        try {
+          k = std::stoi(tok.substr(0, slash));
+        } catch (...) {
+          throw std::invalid_argument(path + ":" + std::to_string(ln) + ": malformed face index '" + tok + "'");
+        }
+        if (k < 0) k = static_cast<int>(m.vertices.size()) + 1 + k;
+        if (k < 1 || k > static_cast<int>(m.vertices.size()))
+          throw std::invalid_argument(path + ":" + std::to_string(ln) + ": face index out of range");
+        idx.push_back(k - 1);
+      }
+      if (idx.size() < 3) throw std::invalid_argument(path + ":" + std::to_string(ln) + ": face with < 3 vertices");
+      for (std::size_t i = 1; i + 1 < idx.size(); ++i) m.triangles.push_back({idx[0], idx[i], idx[i + 1]});
+    }
+  }
+  if (m.triangles.empty()) throw std::invalid_argument("mesh file '" + path + "' has no faces");
+  return m;
+}
+
+Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
+  const std::vector<std::string> kinds3 = {"sphere", "ellipsoid", "superellipsoid", "box", "polyhedron"};
+  const std::vector<std::string> kinds2 = {"disk", "ellipse", "superellipse", "polygon"};
+  const std::string type = c.choice("type", dim == 3 ? "sphere" : "disk", dim == 3 ? kinds3 : kinds2);
+  const ShapeResolution res = resolution_from(c);
+  // Unit templates: sizes default so that the equivalent diameter is about 1 m; the
+  // packing rescales each grain exactly to its drawn diameter.
+  auto length = [&](const std::string& key, double def) { return unit ? c.positive(key, def) : c.positive(key); };
+  auto lengths = [&](const std::string& key, std::vector<double> def, std::size_t n) {
+    auto v = unit ? c.numbers(key, def) : c.numbers(key);
+    if (v.size() != n) c.fail(key, "expected " + std::to_string(n) + " numbers");
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(v[i] > 0)) c.fail(key + "/" + std::to_string(i), "expected a length > 0");
+    return v;
+  };
+  const double scale = c.positive("scale", 1.0);
+  Shape::Ptr base = guarded(c, [&]() -> Shape::Ptr {
+    if (type == "sphere") return Shape::sphere(length("radius", 0.5), res);
+    if (type == "ellipsoid") {
+      auto r = lengths("radii", {0.5, 0.5, 0.5}, 3);
+      return Shape::ellipsoid({r[0], r[1], r[2]}, res);
+    }
+    if (type == "superellipsoid") {
+      auto r = lengths("radii", {0.5, 0.5, 0.5}, 3);
+      return Shape::superellipsoid({r[0], r[1], r[2]}, c.number("eps1", 1.0, 1e-3, 2.0),
+                                   c.number("eps2", 1.0, 1e-3, 2.0), res);
+    }
+    if (type == "box") {
+      auto h = lengths("half_extents", {0.4, 0.4, 0.4}, 3);
+      return Shape::box({h[0], h[1], h[2]}, res);
+    }
+    if (type == "polyhedron") {
+      TriMesh m;
+      if (c.has("file")) {
+        m = read_obj(c.string("file"));
+      } else {
+        m.vertices = point_list(c, "vertices", 3);
+        const auto& t = c.raw("triangles");
+        if (!t.is_array()) c.fail("triangles", "expected an array of index triples");
+        for (std::size_t i = 0; i < t.size(); ++i) {
+          if (!t[i].is_array() || t[i].size() != 3 || !t[i][0].is_number_integer() ||
+              !t[i][1].is_number_integer() || !t[i][2].is_number_integer())
+            c.fail("triangles/" + std::to_string(i), "expected 3 integer vertex indices");
+          m.triangles.push_back({t[i][0].get<int>(), t[i][1].get<int>(), t[i][2].get<int>()});
+        }
+      }
+      return Shape::polyhedron(std::move(m), res);
+    }
+    if (type == "disk") return Shape::disk(length("radius", 0.5), res);
+    if (type == "ellipse") {
+      auto r = lengths("radii", {0.5, 0.5}, 2);
+      return Shape::ellipse(r[0], r[1], res);
+    }
+    if (type == "superellipse") {
+      auto r = lengths("radii", {0.5, 0.5}, 2);
+      return Shape::superellipse(r[0], r[1], c.number("eps", 1.0, 1e-3, 2.0), res);
+    }
+    return Shape::polygon(point_list(c, "vertices", 2), res);
+  });
+  return scale == 1.0 ? base : guarded(c, [&] { return base->scaled(scale); });
+}
+
+}  // namespace crumble

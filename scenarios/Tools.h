@@ -1,0 +1,23 @@
+// Helpers of the command line that belong to the composition root.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "scenarios/ScenarioFactory.h"
+
+namespace crumble {
+
+// series.csv, events.csv, breakage_per_mpa.csv, psd.csv, VTK, and for single-grain scenes
+// the crushing figures in summary.json.
+void attach_standard_observers(Scenario& sc, const std::string& out_dir);
+
+// `crumble shape`: volume, centroid, inertia, surface area (2D perimeter), grid, nodes of a
+// shape under one representation.
+nlohmann::json shape_report(const std::string& spec, const std::string& representation, double spacing,
+                            long nodes);
+
+// `crumble bench WHAT`: one JSON object.
+nlohmann::json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario);
+
+}  // namespace crumble

@@ -1,0 +1,301 @@
+#include "scenarios/Writers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "geometry/LevelSetGrid.h"
+
+namespace crumble {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+void write_file_atomic(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
+    out << content;
+    out.flush();
+    if (!out) throw std::runtime_error("write failed for '" + tmp + "'");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+}
+
+CsvStream::CsvStream(std::string path, const std::string& header) : path_(std::move(path)) {
+  out_.open(path_ + ".part", std::ios::trunc);
+  if (!out_) throw std::runtime_error("cannot write '" + path_ + ".part'");
+  out_ << std::setprecision(10) << header << "\n";
+}
+
+CsvStream::~CsvStream() {
+  // An unfinished run leaves its rows in <file>.part, never a truncated <file>.
+  if (!done_) out_.flush();
+}
+
+void CsvStream::finish() {
+  if (done_) return;
+  out_.close();
+  std::error_code ec;
+  fs::rename(path_ + ".part", path_, ec);
+  if (ec) throw std::runtime_error("cannot rename '" + path_ + ".part': " + ec.message());
+  done_ = true;
+}
+
+namespace {
+void check_finite(double v, const char* what) {
+  if (!std::isfinite(v)) throw std::runtime_error(std::string("refusing to write a non-finite ") + what);
+}
+}  // namespace
+
+SeriesWriter::SeriesWriter(const std::string& dir)
+    : csv_(dir + "/series.csv",
+           "time_s,step,dt_s,platen_stress_Pa,target_stress_Pa,axial_strain,void_ratio,grains,breakage_events,"
+           "analyses,platen_height_m,platen_force_N,floor_force_N") {}
+
+void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
+  if (s.step == last_step_) return;
+  last_step_ = s.step;
+  for (double v : {s.time, s.platen_stress, s.axial_strain, s.void_ratio, s.platen_force, s.floor_force})
+    check_finite(v, "value in series.csv");
+  csv_.row() << s.time << ',' << s.step << ',' << s.dt << ',' << s.platen_stress << ',' << s.target_stress << ','
+             << s.axial_strain << ',' << s.void_ratio << ',' << s.grains << ',' << s.breakage_events << ','
+             << s.analyses << ',' << s.platen_height << ',' << s.platen_force << ',' << s.floor_force << '\n';
+}
+
+void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
+
+EventsWriter::EventsWriter(const std::string& dir)
+    : dir_(dir),
+      csv_(dir + "/events.csv",
+           "time_s,platen_stress_Pa,grain,diameter_m,generation,points,bonds,steps,wall_ms,outcome,criterion,"
+           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method") {}
+
+void EventsWriter::flush_pending() {
+  if (!has_pending_) return;
+  const auto& r = pending_;
+  csv_.row() << r.time << ',' << r.platen_stress << ',' << r.grain << ',' << r.diameter << ',' << r.generation << ','
+             << r.analysis.points << ',' << r.analysis.bonds << ',' << r.analysis.steps << ',' << r.analysis.wall_ms
+             << ',' << r.analysis.outcome << ',' << r.analysis.criterion << ',' << r.analysis.load << ",0,,,0,\n";
+  has_pending_ = false;
+}
+
+void EventsWriter::on_analysis(const Simulation&, const AnalysisRecord& r) {
+  flush_pending();
+  pending_ = r;
+  has_pending_ = true;
+}
+
+void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
+  // The breakage follows the analysis of the same grain: write them as one row.
+  has_pending_ = false;
+  std::ostringstream vols, diams;
+  vols << std::setprecision(10);
+  diams << std::setprecision(10);
+  for (std::size_t i = 0; i < e.child_volumes.size(); ++i) {
+    vols << (i ? ";" : "") << e.child_volumes[i];
+    diams << (i ? ";" : "") << e.child_diameters[i];
+  }
+  csv_.row() << e.time << ',' << e.platen_stress << ',' << e.parent << ',' << e.parent_diameter << ',' << e.generation
+             << ',' << e.analysis.points << ',' << e.analysis.bonds << ',' << e.analysis.steps << ','
+             << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.criterion << ','
+             << e.analysis.load << ',' << e.children.size() << ',' << vols.str() << ',' << diams.str() << ','
+             << e.removed_volume << ',' << e.fragment_method << '\n';
+  event_stress_.push_back(e.platen_stress);
+}
+
+void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) {
+  flush_pending();
+  csv_.finish();
+  std::map<long, long> per;
+  for (double st : event_stress_) ++per[static_cast<long>(std::floor(st / 1e6))];
+  std::ostringstream os;
+  os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
+  const long top = static_cast<long>(std::floor(std::max(0.0, s.platen_stress) / 1e6));
+  long last = top;
+  if (!per.empty()) last = std::max(last, per.rbegin()->first);
+  for (long m = 0; m <= last; ++m) os << m << ',' << m + 1 << ',' << (per.count(m) ? per[m] : 0) << '\n';
+  write_file_atomic(dir_ + "/breakage_per_mpa.csv", os.str());
+}
+
+PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels) : dir_(dir), levels_(std::move(levels)) {
+  std::sort(levels_.begin(), levels_.end());
+}
+
+void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
+  for (const auto& g : sim.grains()) d_max_ = std::max(d_max_, g.shape->equivalent_diameter());
+  table(sim, s.platen_stress, "initial");
+}
+
+void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
+  while (next_ < levels_.size() && s.platen_stress >= levels_[next_]) {
+    table(sim, s.platen_stress, "level");
+    ++next_;
+  }
+}
+
+void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
+  table(sim, s.platen_stress, "final");
+  write_file_atomic(dir_ + "/psd.csv",
+                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass\n" + rows_);
+}
+
+void PsdWriter::table(const Simulation& sim, double stress, const char* label) {
+  // Sieves: geometric series from d_max down by factors of 2^(1/4), 24 sieves.
+  std::vector<double> sieves;
+  for (int k = 0; k <= 24; ++k) sieves.push_back(d_max_ * std::pow(2.0, -k / 4.0));
+  double total = sim.removed_volume();
+  for (const auto& g : sim.grains()) total += g.shape->volume();
+  std::ostringstream os;
+  os << std::setprecision(10);
+  for (double sv : sieves) {
+    double pass = sim.removed_volume();  // fines are smaller than every sieve listed here
+    for (const auto& g : sim.grains())
+      if (g.shape->equivalent_diameter() <= sv) pass += g.shape->volume();
+    os << label << ',' << stress << ',' << sv << ',' << (total > 0 ? 100.0 * pass / total : 0) << '\n';
+  }
+  rows_ += os.str();
+}
+
+VtkWriter::VtkWriter(const std::string& dir, long every, bool final_state)
+    : dir_(dir), every_(every), final_(final_state) {
+  fs::create_directories(dir_ + "/vtk");
+}
+
+void VtkWriter::on_start(const Simulation& sim, const RunState& s) {
+  if (every_ > 0 || final_) snapshot(sim, s);
+}
+
+void VtkWriter::on_sample(const Simulation& sim, const RunState& s) {
+  if (every_ > 0 && (last_ < 0 || s.step - last_ >= every_)) snapshot(sim, s);
+}
+
+void VtkWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
+  if (final_ && s.step != last_) snapshot(sim, s);
+  std::ostringstream os;
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (const auto& [t, f] : files_) os << "  <DataSet timestep=\"" << t << "\" file=\"vtk/" << f << "\"/>\n";
+  os << "</Collection>\n</VTKFile>\n";
+  write_file_atomic(dir_ + "/grains.pvd", os.str());
+}
+
+void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
+  auto& sim = const_cast<Simulation&>(sim_c);
+  sim.sync_grains();
+  last_ = s.step;
+  std::vector<Vec3> pts;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::vector<int>> polys2d;
+  std::vector<long> cell_id, cell_gen;
+  std::vector<double> cell_d;
+  for (const auto& g : sim.grains()) {
+    const int base = static_cast<int>(pts.size());
+    if (g.shape->dimension() == 3) {
+      const TriMesh& m = g.shape->mesh();
+      for (const auto& v : m.vertices) pts.push_back(g.to_world(v));
+      for (const auto& t : m.triangles) {
+        tris.push_back({base + t[0], base + t[1], base + t[2]});
+        cell_id.push_back(g.id);
+        cell_gen.push_back(g.generation);
+        cell_d.push_back(g.shape->equivalent_diameter());
+      }
+    } else {
+      const auto& o = g.shape->outline();
+      std::vector<int> poly;
+      for (const auto& v : o) {
+        poly.push_back(static_cast<int>(pts.size()));
+        pts.push_back(g.to_world(v));
+      }
+      polys2d.push_back(poly);
+      cell_id.push_back(g.id);
+      cell_gen.push_back(g.generation);
+      cell_d.push_back(g.shape->equivalent_diameter());
+    }
+  }
+  std::ostringstream os;
+  os << std::setprecision(9);
+  const std::size_t ncells = tris.size() + polys2d.size();
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+     << "<PolyData>\n<Piece NumberOfPoints=\"" << pts.size() << "\" NumberOfPolys=\"" << ncells << "\">\n"
+     << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const auto& p : pts) os << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  os << "</DataArray></Points>\n<Polys><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (const auto& t : tris) os << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  for (const auto& p : polys2d) {
+    for (int i : p) os << i << ' ';
+    os << '\n';
+  }
+  os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  long off = 0;
+  for (std::size_t i = 0; i < tris.size(); ++i) os << (off += 3) << '\n';
+  for (const auto& p : polys2d) os << (off += static_cast<long>(p.size())) << '\n';
+  os << "</DataArray>\n</Polys>\n<CellData Scalars=\"grain\">\n"
+     << "<DataArray type=\"Int64\" Name=\"grain\" format=\"ascii\">\n";
+  for (long v : cell_id) os << v << '\n';
+  os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"generation\" format=\"ascii\">\n";
+  for (long v : cell_gen) os << v << '\n';
+  os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"diameter\" format=\"ascii\">\n";
+  for (double v : cell_d) os << v << '\n';
+  os << "</DataArray>\n</CellData>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  char name[64];
+  std::snprintf(name, sizeof name, "grains_%08ld.vtp", s.step);
+  write_file_atomic(dir_ + "/vtk/" + name, os.str());
+  files_.push_back({s.time, name});
+}
+
+std::string format_progress(const RunState& s, double fraction, double elapsed) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(1) << "[" << 100 * fraction << "%] t=" << std::setprecision(5) << s.time
+     << " s step " << s.step << " stress " << std::setprecision(3) << s.platen_stress / 1e6 << " MPa, "
+     << s.grains << " grains, " << s.breakage_events << " breakages";
+  if (fraction > 1e-3) {
+    const double eta = elapsed * (1 - fraction) / fraction;
+    os << ", ETA " << std::setprecision(0) << eta << " s";
+  }
+  return os.str();
+}
+
+Json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,
+                  const std::string& breakage, const std::string& fragments, std::uint64_t seed, int threads) {
+  Json j;
+  j["scenario"] = scenario;
+  j["engine"] = engine;
+  j["breakage"] = breakage;
+  j["fragments"] = fragments;
+  j["seed"] = seed;
+  j["threads"] = threads;
+  j["wall_seconds"] = s.wall_seconds;
+  j["steps"] = s.steps;
+  j["simulated_time_s"] = s.time;
+  j["grains_initial"] = s.grains_initial;
+  j["grains_final"] = s.grains_final;
+  j["breakage_events"] = s.breakage_events;
+  j["analyses"] = s.analyses;
+  j["fragment_fallbacks"] = s.fragment_fallbacks;
+  j["dt_reductions"] = s.dt_reductions;
+  j["mass_initial_kg"] = s.mass_initial;
+  j["mass_final_kg"] = s.mass_final;
+  j["mass_removed_kg"] = s.mass_removed;
+  j["void_ratio_initial"] = s.void_ratio_initial;
+  j["void_ratio_final"] = s.void_ratio_final;
+  j["max_platen_stress_Pa"] = s.max_platen_stress;
+  j["time_breakdown_s"] = {{"engine", s.timings.engine},     {"contacts", s.timings.contacts},
+                           {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
+                           {"fragments", s.timings.fragments}, {"output", s.timings.observers}};
+  for (const auto& [k, v] : s.extra) j[k] = v;
+  for (const auto& [k, v] : s.extra_arrays) j[k] = v;
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it->is_number_float() && !std::isfinite(it->get<double>()))
+      throw std::runtime_error("summary value '" + it.key() + "' is not finite");
+  return j;
+}
+
+}  // namespace crumble

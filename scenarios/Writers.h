@@ -1,0 +1,106 @@
+// Output writers, attached to the Simulation as Observers. Every file is written to a
+// temporary name and renamed into place when complete (no half-written results).
+#pragma once
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/Observer.h"
+#include "core/Simulation.h"
+
+namespace crumble {
+
+// Write `content` to `path` atomically (temporary file + rename).
+void write_file_atomic(const std::string& path, const std::string& content);
+
+// An append-only CSV written to `<path>.part` and renamed to `path` when finished.
+class CsvStream {
+ public:
+  CsvStream(std::string path, const std::string& header);
+  ~CsvStream();
+  std::ofstream& row() { return out_; }
+  void finish();
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  bool done_ = false;
+};
+
+// series.csv: time, stress, strain, void ratio, grain count, breakage events (+ more).
+class SeriesWriter : public Observer {
+ public:
+  explicit SeriesWriter(const std::string& dir);
+  void on_sample(const Simulation&, const RunState& s) override;
+  void on_finish(const Simulation&, const RunState&, RunSummary&) override;
+
+ private:
+  CsvStream csv_;
+  long last_step_ = -1;
+};
+
+// events.csv: one row per breakage analysis; breakage_per_mpa.csv: crushing events per
+// MPa of platen stress.
+class EventsWriter : public Observer {
+ public:
+  explicit EventsWriter(const std::string& dir);
+  void on_analysis(const Simulation&, const AnalysisRecord& r) override;
+  void on_breakage(const Simulation&, const BreakageEvent& e) override;
+  void on_finish(const Simulation&, const RunState&, RunSummary&) override;
+
+ private:
+  void flush_pending();
+  std::string dir_;
+  CsvStream csv_;
+  bool has_pending_ = false;
+  AnalysisRecord pending_;
+  std::vector<double> event_stress_;
+};
+
+// psd.csv: particle size distribution by mass (removed fines counted in the finest bin)
+// when the platen stress first reaches each requested level, and at the end.
+class PsdWriter : public Observer {
+ public:
+  PsdWriter(const std::string& dir, std::vector<double> levels);
+  void on_start(const Simulation& sim, const RunState& s) override;
+  void on_sample(const Simulation& sim, const RunState& s) override;
+  void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
+
+ private:
+  void table(const Simulation& sim, double stress, const char* label);
+  std::string dir_;
+  std::vector<double> levels_;
+  std::size_t next_ = 0;
+  std::string rows_;
+  double d_max_ = 0;
+};
+
+// grains_NNNNNN.vtp snapshots (grain surfaces in world coordinates with id, generation,
+// diameter) and grains.pvd, for ParaView.
+class VtkWriter : public Observer {
+ public:
+  VtkWriter(const std::string& dir, long every, bool final_state);
+  void on_start(const Simulation& sim, const RunState& s) override;
+  void on_sample(const Simulation& sim, const RunState& s) override;
+  void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
+
+ private:
+  void snapshot(const Simulation& sim, const RunState& s);
+  std::string dir_;
+  long every_;
+  bool final_;
+  long last_ = -1;
+  std::vector<std::pair<double, std::string>> files_;
+};
+
+// Progress with ETA on stderr.
+std::string format_progress(const RunState& s, double fraction, double elapsed_s);
+
+nlohmann::json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,
+                            const std::string& breakage, const std::string& fragments, std::uint64_t seed,
+                            int threads);
+
+}  // namespace crumble

@@ -1,0 +1,70 @@
+#include <gtest/gtest.h>
+
+#include "core/Screening.h"
+
+using namespace crumble;
+
+namespace {
+Grain grain(double d, double threshold) {
+  Grain g;
+  g.id = 1;
+  g.shape = Shape::sphere(d / 2);
+  g.strength.threshold_force = threshold;
+  return g;
+}
+Contact contact(Vec3 p, Vec3 f) {
+  Contact c;
+  c.a = 1;
+  c.b = 2;
+  c.point = p;
+  c.normal = normalized(f);
+  c.force = f;
+  return c;
+}
+}  // namespace
+
+TEST(Screening, DiametricalPairIsSelected) {
+  const Grain g = grain(2e-3, 80);
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0, 0, -1e-3}, {0, 0, 100})};
+  auto r = screen(g, cs, {});
+  EXPECT_TRUE(r.selected) << r.reason;
+  EXPECT_NEAR(r.max_force, 100, 1e-12);
+  EXPECT_NEAR(r.unbalanced_force_ratio, 0, 1e-12);
+  EXPECT_NEAR(r.unbalanced_moment_ratio, 0, 1e-12);
+}
+
+TEST(Screening, SizeLimit) {
+  const Grain g = grain(0.29e-3, 0);
+  std::vector<Contact> cs{contact({0, 0, 1e-4}, {0, 0, -100}), contact({0, 0, -1e-4}, {0, 0, 100})};
+  EXPECT_STREQ(screen(g, cs, {}).reason, "too_small");
+  ScreeningSettings s;
+  s.min_diameter = 0.2e-3;
+  EXPECT_TRUE(screen(g, cs, s).selected);
+}
+
+TEST(Screening, ForceThreshold) {
+  const Grain g = grain(2e-3, 80);
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -79}), contact({0, 0, -1e-3}, {0, 0, 79})};
+  EXPECT_STREQ(screen(g, cs, {}).reason, "below_threshold");
+  ScreeningSettings s;
+  s.force_threshold = false;
+  EXPECT_TRUE(screen(g, cs, s).selected);
+}
+
+TEST(Screening, UnbalancedForce) {
+  const Grain g = grain(2e-3, 80);
+  // |ΣF| = 3, mean |F| = 98.5 → ratio 0.0305 > 0.02.
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0, 0, -1e-3}, {0, 0, 97})};
+  auto r = screen(g, cs, {});
+  EXPECT_STREQ(r.reason, "unbalanced_force");
+  EXPECT_NEAR(r.unbalanced_force_ratio, 3 / 98.5, 1e-12);
+}
+
+TEST(Screening, UnbalancedMoment) {
+  const Grain g = grain(2e-3, 80);
+  // Balanced forces but a couple: two opposite forces offset sideways.
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0.5e-3, 0, -1e-3}, {0, 0, 100})};
+  auto r = screen(g, cs, {});
+  EXPECT_STREQ(r.reason, "unbalanced_moment");
+  EXPECT_GT(r.unbalanced_moment_ratio, 0.2);
+}
