@@ -4,6 +4,7 @@
 //   crumble list
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
 //   crumble bench pd-kernel|lsdem ...
+//   crumble --plugin lib.so <subcommand> ...   (out-of-tree engines, models, builders)
 // Exit status: 0 success, 2 bad input (scenario, option, mesh), 1 failure while running.
 #include <CLI/CLI.hpp>
 
@@ -15,6 +16,7 @@
 
 #include "crumble_config.h"
 #include "geometry/LevelSetGrid.h"
+#include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
 #include "scenarios/ShapeSpec.h"
@@ -116,6 +118,8 @@ int main(int argc, char** argv) {
   CLI::App app{"crumble — particle breakage in granular materials (Zhu & Zhao 2019, Harmon et al. 2020)"};
   app.set_version_flag("--version", std::string("crumble ") + CRUMBLE_VERSION);
   app.require_subcommand(1);
+  std::vector<std::string> plugins;
+  app.add_option("--plugin", plugins, "load a plugin shared library (repeatable; before the subcommand)");
 
   std::string file, out, shape_spec, repr = "level_set", bench_what, bench_scenario;
   std::vector<std::string> sets;
@@ -164,6 +168,7 @@ int main(int argc, char** argv) {
   }
 
   try {
+    for (const auto& p : plugins) load_plugin(p);
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet);
     if (*val) return cmd_validate(file, sets, print);
     if (*lst) return cmd_list();

@@ -7,7 +7,7 @@
 namespace crumble {
 
 // Breakage model `none`: grains never break, so rigid runs are scenarios too.
-class NoBreakage final : public BreakageModel {
+class NoBreakage : public BreakageModel {
  public:
   std::string name() const override { return "none"; }
   bool active() const override { return false; }

@@ -1,0 +1,29 @@
+// Out-of-tree plugins (DESIGN.md "Registry and plugins", STYLE.md §4): a shared library
+// exporting two C entry points,
+//
+//   extern "C" int crumble_plugin_abi();   // must return crumble::kPluginAbi
+//   extern "C" void crumble_plugin_register(crumble::PluginRegistrar& r);
+//
+// loaded with `crumble --plugin path.so ...`. A library built against another ABI version
+// is refused with a clear error before any of its code registers anything.
+#pragma once
+#include <string>
+
+#include "scenarios/Registry.h"
+
+namespace crumble {
+
+// Bumped whenever a seam interface (core/Engine.h, BreakageModel.h, FragmentBuilder.h,
+// Observer.h) or the registrar changes.
+inline constexpr int kPluginAbi = 1;
+
+struct PluginRegistrar {
+  Table<EngineFactory>& engines;
+  Table<ModelFactory>& breakage_models;
+  Table<BuilderFactory>& fragment_builders;
+};
+
+// Throws std::invalid_argument naming the file and the problem.
+void load_plugin(const std::string& path);
+
+}  // namespace crumble
