@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/Analysis.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/ShapeSpec.h"
@@ -48,6 +49,36 @@ class CrushingRecorder : public Observer {
   std::vector<double> diam_;
 };
 
+// NCL slope and fractal dimension for summary.json.
+class CompressionRecorder : public Observer {
+ public:
+  void on_sample(const Simulation&, const RunState& s) override {
+    stress_.push_back(s.platen_stress);
+    e_.push_back(s.void_ratio);
+  }
+  void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
+    // seeds/000 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
+    // over the upper part of the loading (σ ≥ 0.3 σ_max).
+    double smax = 0;
+    for (double s : stress_) smax = std::max(smax, s);
+    std::vector<double> x, y;
+    for (std::size_t i = 0; i < stress_.size(); ++i)
+      if (stress_[i] >= 0.3 * smax && stress_[i] > 0) {
+        x.push_back(stress_[i]);
+        y.push_back(e_[i]);
+      }
+    const double slope = loglog_slope(x, y);
+    if (std::isfinite(slope)) sum.extra["ncl_loglog_slope"] = slope;
+    std::vector<double> d;
+    for (const auto& g : sim.grains()) d.push_back(g.shape->equivalent_diameter());
+    const double D = fractal_dimension(d);
+    if (std::isfinite(D)) sum.extra["fractal_dimension_final"] = D;
+  }
+
+ private:
+  std::vector<double> stress_, e_;
+};
+
 Json mass_json(const MassProperties& mp) {
   Json I = Json::array();
   for (int i = 0; i < 3; ++i) I.push_back({mp.inertia(i, 0), mp.inertia(i, 1), mp.inertia(i, 2)});
@@ -69,6 +100,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final));
+  sim.add_observer(std::make_shared<CompressionRecorder>());
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());
 }
 
