@@ -7,14 +7,18 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "core/Rng.h"
+
 namespace crumble {
 
 // ---- Per-shape data, shared by every grain of the shape (STYLE.md §12) ----
 struct LsdemEngine::ShapeData {
+  // Sphere tree over the nodes (median splits); leaves hold at most kLeaf nodes.
   struct Cluster {
     Vec3 c;
     double r;
-    int begin, end;
+    int begin, end;   // node range
+    int left, right;  // children (-1: leaf)
   };
   Shape::Ptr shape;
   std::shared_ptr<const LevelSetGrid> grid;
@@ -71,23 +75,29 @@ Mat3 inverse(const Mat3& a) {
   return r * (1.0 / det);
 }
 
-// Recursive median split of the nodes into clusters of at most kLeaf nodes (deterministic).
-constexpr int kLeaf = 32;
-void split(std::vector<int>& idx, int lo, int hi, const std::vector<Vec3>& p, std::vector<std::pair<int, int>>& out) {
-  if (hi - lo <= kLeaf) {
-    out.push_back({lo, hi});
-    return;
-  }
+// Recursive median split of the nodes into a sphere tree (deterministic). Fills `tree` in
+// depth-first order and the node permutation `idx`; returns the index of the subtree root.
+constexpr int kLeaf = 16;
+template <class Cluster>
+int split(std::vector<int>& idx, int lo, int hi, const std::vector<Vec3>& p, std::vector<Cluster>& tree) {
   Aabb b;
   for (int i = lo; i < hi; ++i) b.extend(p[idx[i]]);
+  Cluster c{b.center(), 0, lo, hi, -1, -1};
+  for (int i = lo; i < hi; ++i) c.r = std::max(c.r, norm(p[idx[i]] - c.c));
+  const int me = static_cast<int>(tree.size());
+  tree.push_back(c);
+  if (hi - lo <= kLeaf) return me;
   const Vec3 e = b.size();
   const int ax = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
   const int mid = (lo + hi) / 2;
-  std::nth_element(idx.begin() + lo, idx.begin() + mid, idx.begin() + hi, [&](int a, int c) {
-    return p[a][ax] < p[c][ax] || (p[a][ax] == p[c][ax] && a < c);
+  std::nth_element(idx.begin() + lo, idx.begin() + mid, idx.begin() + hi, [&](int a, int d) {
+    return p[a][ax] < p[d][ax] || (p[a][ax] == p[d][ax] && a < d);
   });
-  split(idx, lo, mid, p, out);
-  split(idx, mid, hi, p, out);
+  const int l = split(idx, lo, mid, p, tree);
+  const int r = split(idx, mid, hi, p, tree);
+  tree[me].left = l;
+  tree[me].right = r;
+  return me;
 }
 
 struct PenNode {
@@ -157,21 +167,11 @@ LsdemEngine::ShapeData& LsdemEngine::shape_data(const Shape::Ptr& s) {
   const auto& gw = d->grid->node_weights();
   std::vector<int> idx(gn.size());
   std::iota(idx.begin(), idx.end(), 0);
-  std::vector<std::pair<int, int>> leaves;
-  split(idx, 0, static_cast<int>(idx.size()), gn, leaves);
+  if (!gn.empty()) split(idx, 0, static_cast<int>(idx.size()), gn, d->clusters);
   const double h = d->grid->spacing();
-  for (const auto& [lo, hi] : leaves) {
-    ShapeData::Cluster c{{}, 0, static_cast<int>(d->nodes.size()), 0};
-    Aabb b;
-    for (int i = lo; i < hi; ++i) {
-      d->nodes.push_back(gn[idx[i]]);
-      d->w.push_back(gw[idx[i]]);
-      b.extend(gn[idx[i]]);
-    }
-    c.end = static_cast<int>(d->nodes.size());
-    c.c = b.center();
-    for (int i = c.begin; i < c.end; ++i) c.r = std::max(c.r, norm(d->nodes[i] - c.c));
-    d->clusters.push_back(c);
+  for (int i : idx) {
+    d->nodes.push_back(gn[i]);
+    d->w.push_back(gw[i]);
   }
   for (const auto& p : d->nodes) {
     d->radius = std::max(d->radius, norm(p));
@@ -474,12 +474,23 @@ void LsdemEngine::compute_forces(double dt) {
         const Mat3 Rab = RbT * A.R;
         const Vec3 tab = RbT * (A.x - B.x);
         const double rb = sb.radius;
-        for (const auto& c : sa.clusters) {
+        // Descend the master's node tree, pruning subtrees outside the partner's
+        // bounding sphere or box (in the partner's frame).
+        int stack[64];
+        int top = 0;
+        if (!sa.clusters.empty() && norm2(B.x - A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
+        while (top > 0) {
+          const auto& c = sa.clusters[stack[--top]];
           const Vec3 yc = Rab * c.c + tab;
           if (norm2(yc) > (c.r + rb) * (c.r + rb)) continue;
           bool out = false;
           for (int a = 0; a < dim && !out; ++a) out = yc[a] + c.r < sb.box.lo[a] || yc[a] - c.r > sb.box.hi[a];
           if (out) continue;
+          if (c.left >= 0) {
+            stack[top++] = c.right;
+            stack[top++] = c.left;
+            continue;
+          }
           for (int i = c.begin; i < c.end; ++i) {
             const Vec3 y = Rab * sa.nodes[i] + tab;
             bool outside = false;
@@ -510,9 +521,18 @@ void LsdemEngine::compute_forces(double dt) {
         if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, it.old, it);
       } else {
         const Wall& wl = W[-1 - it.b];
-        for (const auto& c : sa.clusters) {
+        int stack[64];
+        int top = 0;
+        if (!sa.clusters.empty()) stack[top++] = 0;
+        while (top > 0) {
+          const auto& c = sa.clusters[stack[--top]];
           const Vec3 xc = A.R * c.c + A.x;
           if (dot(xc - wl.point, wl.normal) > c.r) continue;
+          if (c.left >= 0) {
+            stack[top++] = c.right;
+            stack[top++] = c.left;
+            continue;
+          }
           for (int i = c.begin; i < c.end; ++i) {
             const Vec3 X = A.R * sa.nodes[i] + A.x;
             const double s = dot(X - wl.point, wl.normal);
@@ -653,6 +673,36 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
   if (s.contact_law == "hertz" && ctx.dimension == 2)
     cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
   return std::make_unique<LsdemEngine>(s, ctx);
+}
+
+void lsdem_bench_scene(LsdemEngine& e, const LsdemBenchScene& sc) {
+  if (sc.grains <= 0 || sc.nodes <= 0 || sc.shapes <= 0 || sc.per_row <= 0 || !(sc.radius > 0))
+    throw std::invalid_argument("lsdem_bench_scene: counts and radius must be > 0");
+  if (e.grain_count() != 0) throw std::invalid_argument("lsdem_bench_scene: the engine must be empty");
+  Rng rng(sc.seed);
+  std::vector<Shape::Ptr> shapes;
+  for (int i = 0; i < sc.shapes; ++i) {
+    const Vec3 r{sc.radius * rng.uniform(0.8, 1.2), sc.radius * rng.uniform(0.8, 1.2),
+                 sc.radius * rng.uniform(0.8, 1.2)};
+    ShapeResolution res;
+    res.surface_nodes = sc.nodes;
+    shapes.push_back(Shape::superellipsoid(r, rng.uniform(0.4, 1.2), rng.uniform(0.4, 1.2), res));
+  }
+  const double a = 2.6 * sc.radius;
+  Container box;
+  box.lx = box.ly = a * sc.per_row;
+  e.set_container(box);
+  for (int i = 0; i < sc.grains; ++i) {
+    Grain g;
+    g.id = i;
+    g.shape = shapes[i % sc.shapes];
+    const int ix = i % sc.per_row, iy = (i / sc.per_row) % sc.per_row, iz = i / (sc.per_row * sc.per_row);
+    g.position = {a * (ix + 0.5), a * (iy + 0.5), a * (iz + 0.5) + 0.2 * sc.radius};
+    g.orientation = Quat::from_axis_angle({rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)},
+                                          rng.uniform(0, 2 * kPi));
+    g.velocity = Vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)} * 0.05;
+    e.add_grain(g);
+  }
 }
 
 LsdemBenchResult lsdem_bench_phase(LsdemEngine& e, long steps, double dt) {

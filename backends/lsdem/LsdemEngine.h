@@ -157,6 +157,21 @@ class LsdemEngine final : public Engine {
 // damping_ratio 0.4, global_damping 0 1/s, dt_safety 0.1, hertz_reference_overlap 0.01.
 std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx);
 
+// The speed benchmark's scene (after YADE's examples/levelSet/discharge.py): `grains`
+// superellipsoids (radii `radius`·U(0.8, 1.2) per axis, exponents U(0.4, 1.2), drawn among
+// `shapes` distinct shapes with `nodes` surface nodes each) on a cubic lattice of spacing
+// 2.6·radius above the floor of a box whose side holds `per_row` grains; they are given a
+// small random velocity and fall. Sets the container (no platen); the engine must be empty.
+struct LsdemBenchScene {
+  int grains = 1000;
+  int nodes = 2000;
+  int shapes = 10;
+  int per_row = 10;
+  double radius = 5e-3;  // m
+  std::uint64_t seed = 1;
+};
+void lsdem_bench_scene(LsdemEngine& engine, const LsdemBenchScene& scene);
+
 // Runs `steps` steps of `dt` (0 = the engine's max_stable_dt()) and reports speed and the
 // work counters of that phase (the engine's stats are reset first).
 LsdemBenchResult lsdem_bench_phase(LsdemEngine& engine, long steps, double dt = 0);
