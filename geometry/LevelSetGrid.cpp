@@ -455,6 +455,7 @@ std::shared_ptr<const LevelSetGrid> LevelSetGrid::sample(int dim, const Aabb& b,
   auto g = LevelSetGridBuilder::make();
   g->dim_ = dim;
   g->h_ = h;
+  g->inv_h_ = 1.0 / h;
   g->name_ = who;
   g->origin_ = b.lo - Vec3{1, 1, 1} * (opt.pad * h);
   if (dim == 2) g->origin_.z = 0;
@@ -671,6 +672,7 @@ std::shared_ptr<const LevelSetGrid> LevelSetGrid::with_values(std::vector<double
   auto g = LevelSetGridBuilder::make();
   g->dim_ = dim_;
   g->h_ = h_;
+  g->inv_h_ = inv_h_;
   g->origin_ = origin_;
   g->n_ = n_;
   g->name_ = name_;

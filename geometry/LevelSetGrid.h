@@ -55,6 +55,31 @@ class LevelSetGrid {
   // Value and gradient in one lookup (the contact hot path).
   double value_gradient(const Vec3& p, Vec3& grad) const;
   bool inside_grid(const Vec3& p) const;
+  // Fast path for points known to be inside the grid (e.g. within the node box): the
+  // interpolated value only, no bounds handling.
+  double value_inside(const Vec3& p) const {
+    const double fx = (p.x - origin_.x) * inv_h_, fy = (p.y - origin_.y) * inv_h_;
+    int i = static_cast<int>(fx), j = static_cast<int>(fy);
+    i = i < 0 ? 0 : (i > n_[0] - 2 ? n_[0] - 2 : i);
+    j = j < 0 ? 0 : (j > n_[1] - 2 ? n_[1] - 2 : j);
+    const double tx = fx - i, ty = fy - j;
+    const std::size_t sy = static_cast<std::size_t>(n_[0]);
+    if (dim_ == 2) {
+      const double* c = &phi_[i + sy * j];
+      const double a0 = c[0] + (c[1] - c[0]) * tx, a1 = c[sy] + (c[sy + 1] - c[sy]) * tx;
+      return a0 + (a1 - a0) * ty;
+    }
+    const double fz = (p.z - origin_.z) * inv_h_;
+    int k = static_cast<int>(fz);
+    k = k < 0 ? 0 : (k > n_[2] - 2 ? n_[2] - 2 : k);
+    const double tz = fz - k;
+    const std::size_t sz = sy * static_cast<std::size_t>(n_[1]);
+    const double* c = &phi_[i + sy * j + sz * k];
+    const double c00 = c[0] + (c[1] - c[0]) * tx, c10 = c[sy] + (c[sy + 1] - c[sy]) * tx;
+    const double c01 = c[sz] + (c[sz + 1] - c[sz]) * tx, c11 = c[sy + sz] + (c[sy + sz + 1] - c[sy + sz]) * tx;
+    const double c0 = c00 + (c10 - c00) * ty, c1 = c01 + (c11 - c01) * ty;
+    return c0 + (c1 - c0) * tz;
+  }
   Aabb bounds() const;
 
   // Surface nodes (shape frame) and their area (2D: length) weights.
@@ -85,7 +110,7 @@ class LevelSetGrid {
  private:
   LevelSetGrid() = default;
   int dim_ = 3;
-  double h_ = 0;
+  double h_ = 0, inv_h_ = 0;
   Vec3 origin_;
   std::array<int, 3> n_{0, 0, 0};
   std::vector<double> phi_;

@@ -41,18 +41,19 @@ struct LsdemEngine::Body {
   double m = 0, im = 0;
   Mat3 Ib, iIb;  // body-frame inertia and inverse (3D); 2D uses Ib(2,2)
   Vec3 f, t;
+  double moved = 0, turned = 0;  // |v|·dt and |ω|·dt of the last step
 };
 
 struct LsdemEngine::Item {
   int a = -1, b = -1;  // body indices; b < 0: wall index −1 − k
   std::pair<GrainId, GrainId> key;
-  const std::vector<NodeHist>* old = nullptr;
-  std::vector<NodeHist> hist;
+  PairState* st = nullptr;  // persistent state of the key (pointer-stable)
+  bool fresh = true;         // no state from the previous step
   Vec3 fa, ta, tb;
   Vec3 point, normal;
   double fsum = 0;
   bool contact = false;
-  long queries = 0, pen = 0;
+  long queries = 0, pen = 0, tree_queries = 0;
 };
 
 namespace {
@@ -236,7 +237,9 @@ void LsdemEngine::remove_grain(GrainId id) {
   index_.clear();
   for (std::size_t i = 0; i < bodies_.size(); ++i) index_[bodies_[i].id] = i;
   if (--sd->users == 0) shapes_.erase(sd->shape.get());
-  // Histories of the grain drop out at the next step (their pairs no longer exist).
+  // Its pair states go now (a grain added later under the same id starts afresh).
+  for (auto h = history_.begin(); h != history_.end();)
+    h = h->first.first == id || h->first.second == id ? history_.erase(h) : std::next(h);
 }
 
 void LsdemEngine::read_state(std::span<Grain> grains) const {
@@ -320,7 +323,7 @@ namespace {
 // item's force/torque sums, contact summary and new tangential history.
 template <class Item, class Body, class Hist>
 void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Body* B, const Vec3& wall_vel,
-                  double dt, const std::vector<Hist>* old, Item& out) {
+                  double dt, const std::vector<Hist>* old, std::vector<Hist>& hist_out, Item& out) {
   double S = 0, delta = 0;
   for (const auto& n : P) {
     S += n.p * n.w;
@@ -356,8 +359,7 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
   const double ks = L.ks_ratio * k;
   const double cdamp_t = 2 * L.zeta * std::sqrt(L.mstar * ks);
   std::size_t o = 0;
-  out.hist.clear();
-  out.hist.reserve(P.size());
+  hist_out.clear();
   for (const auto& n : P) {
     const double a = n.p * n.w / S;
     const double fn = scale * a;
@@ -383,7 +385,7 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
       tt = l > 0 ? tt * (cap / l) : Vec3{};
       ft = tt;
     }
-    out.hist.push_back({n.node, ft});
+    hist_out.push_back({n.node, ft});
     const Vec3 f = n.n * fn + tt;
     out.fa += f;
     out.ta += cross(n.c - A.x, f);
@@ -443,18 +445,24 @@ void LsdemEngine::compute_forces(double dt) {
         it.key = {bodies_[i].id, -1 - W[k].id};
         items_.push_back(std::move(it));
       }
-  std::sort(items_.begin(), items_.end(), [](const Item& a, const Item& b) { return a.key < b.key; });
+  // (The item order follows the sweep, a function of positions and ids only: deterministic.)
+  ++stamp_;
   for (auto& it : items_) {
-    auto h = history_.find(it.key);
-    if (h != history_.end()) it.old = &h->second;
+    auto [h, fresh] = history_.try_emplace(it.key);
+    it.st = &h->second;
+    it.fresh = fresh || h->second.stamp != stamp_ - 1;
+    if (it.fresh) h->second = PairState{};
+    h->second.stamp = stamp_;
   }
 
   // Narrow phase, in parallel over items; each writes only its own slot.
   const long nitems = static_cast<long>(items_.size());
   const double zeta = s_.damping_ratio;
+  const double lipschitz = std::sqrt(double(dim)) * (1 + 1e-9);
 #pragma omp parallel num_threads(s_.threads)
   {
     std::vector<PenNode> P;
+    std::vector<NodeHist> hist_new;
 #pragma omp for schedule(dynamic, 4)
     for (long ii = 0; ii < nitems; ++ii) {
       Item& it = items_[ii];
@@ -474,37 +482,71 @@ void LsdemEngine::compute_forces(double dt) {
         const Mat3 Rab = RbT * A.R;
         const Vec3 tab = RbT * (A.x - B.x);
         const double rb = sb.radius;
-        // Descend the master's node tree, pruning subtrees outside the partner's
-        // bounding sphere or box (in the partner's frame).
-        int stack[64];
-        int top = 0;
-        if (!sa.clusters.empty() && norm2(B.x - A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
-        while (top > 0) {
-          const auto& c = sa.clusters[stack[--top]];
-          const Vec3 yc = Rab * c.c + tab;
-          if (norm2(yc) > (c.r + rb) * (c.r + rb)) continue;
-          bool out = false;
-          for (int a = 0; a < dim && !out; ++a) out = yc[a] + c.r < sb.box.lo[a] || yc[a] - c.r > sb.box.hi[a];
-          if (out) continue;
-          if (c.left >= 0) {
-            stack[top++] = c.right;
-            stack[top++] = c.left;
-            continue;
-          }
-          for (int i = c.begin; i < c.end; ++i) {
-            const Vec3 y = Rab * sa.nodes[i] + tab;
-            bool outside = false;
-            for (int a = 0; a < dim && !outside; ++a) outside = y[a] < sb.box.lo[a] || y[a] > sb.box.hi[a];
-            if (outside) continue;
+        const double skin = 0.5 * gb.spacing();
+        PairState& ps = *it.st;
+        const bool had = !it.fresh && ps.has_cand;
+        const double drift =
+            had ? ps.drift + A.moved + B.moved + A.turned * sa.radius + B.turned * (sa.radius + norm(A.x - B.x)) : 0;
+        auto visit = [&](int i) {
+          Vec3 g;
+          const Vec3 y = Rab * sa.nodes[i] + tab;
+          const double phi = gb.value_gradient(y, g);
+          if (phi >= 0) return;
+          const double gn = norm(g);
+          if (!(gn > 0)) return;
+          const Vec3 n = B.R * (g / gn);
+          const Vec3 X = A.R * sa.nodes[i] + A.x;
+          P.push_back({i, -phi, n, X + n * (-0.5 * phi), sa.w[i]});
+        };
+        if (had && lipschitz * drift < skin) {
+          // No node outside the candidates can have reached the partner since the search.
+          ps.drift = drift;
+          for (int i : ps.cand) {
             ++it.queries;
-            Vec3 g;
-            const double phi = gb.value_gradient(y, g);
-            if (phi >= 0) continue;
-            const double gn = norm(g);
-            if (!(gn > 0)) continue;
-            const Vec3 n = B.R * (g / gn);
-            const Vec3 X = A.R * sa.nodes[i] + A.x;
-            P.push_back({i, -phi, n, X + n * (-0.5 * phi), sa.w[i]});
+            const Vec3 y = Rab * sa.nodes[i] + tab;
+            if (gb.inside_grid(y) && gb.value_inside(y) < 0) visit(i);
+          }
+        } else {
+          ps.cand.clear();
+          ps.drift = 0;
+          ps.has_cand = true;
+          // Full search: descend the master's node tree, pruning subtrees outside the
+          // partner's bounding sphere or box (in its frame) or farther than the skin.
+          int stack[64];
+          int top = 0;
+          if (!sa.clusters.empty() && norm2(B.x - A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
+          while (top > 0) {
+            const auto& c = sa.clusters[stack[--top]];
+            const Vec3 yc = Rab * c.c + tab;
+            const double reach = c.r + skin;
+            if (norm2(yc) > (reach + rb) * (reach + rb)) continue;
+            bool out = false;
+            for (int a = 0; a < dim && !out; ++a) out = yc[a] + reach < sb.box.lo[a] || yc[a] - reach > sb.box.hi[a];
+            if (out) continue;
+            // Each partial derivative of the trilinear interpolant of 1-Lipschitz samples is
+            // a mean of edge slopes in [−1, 1], so |∇φ| ≤ √dim: the whole sphere is farther
+            // than the skin from the partner when φ(centre) > √dim · r + skin.
+            if (c.r > 0.5 * gb.spacing() || c.left >= 0) {
+              ++it.tree_queries;
+              if ((gb.inside_grid(yc) ? gb.value_inside(yc) : gb.value(yc)) > lipschitz * c.r + skin) continue;
+            }
+            if (c.left >= 0) {
+              stack[top++] = c.right;
+              stack[top++] = c.left;
+              continue;
+            }
+            for (int i = c.begin; i < c.end; ++i) {
+              const Vec3 y = Rab * sa.nodes[i] + tab;
+              bool outside = false;
+              for (int a = 0; a < dim && !outside; ++a)
+                outside = y[a] < sb.box.lo[a] - skin || y[a] > sb.box.hi[a] + skin;
+              if (outside) continue;
+              ++it.queries;
+              const double phi = gb.inside_grid(y) ? gb.value_inside(y) : gb.value(y);
+              if (phi >= skin) continue;
+              ps.cand.push_back(i);
+              if (phi < 0) visit(i);
+            }
           }
         }
         const Material& mb = ctx_.materials[B.material];
@@ -518,7 +560,7 @@ void LsdemEngine::compute_forces(double dt) {
           L.khertz = 4.0 / 3.0 * estar * std::sqrt(rstar);
         }
         it.pen = static_cast<long>(P.size());
-        if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, it.old, it);
+        if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, it.fresh ? nullptr : &it.st->hist, hist_new, it);
       } else {
         const Wall& wl = W[-1 - it.b];
         int stack[64];
@@ -546,8 +588,12 @@ void LsdemEngine::compute_forces(double dt) {
         L.mstar = A.m;
         if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
         it.pen = static_cast<long>(P.size());
-        if (!P.empty()) patch_forces(P, L, A, static_cast<const Body*>(nullptr), wl.velocity, dt, it.old, it);
+        if (!P.empty()) patch_forces(P, L, A, static_cast<const Body*>(nullptr), wl.velocity, dt, it.fresh ? nullptr : &it.st->hist,
+                       hist_new, it);
       }
+      // The new tangential history replaces the old one (empty when out of contact).
+      if (P.empty()) hist_new.clear();
+      std::swap(it.st->hist, hist_new);
     }
   }
 
@@ -565,16 +611,16 @@ void LsdemEngine::compute_forces(double dt) {
       }
     }
   }
-  std::map<std::pair<GrainId, GrainId>, std::vector<NodeHist>> hist;
   contacts_.clear();
   platen_force_ = 0;
   floor_force_ = 0;
-  long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0;
+  long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
     Item& it = items_[k];
     if (it.b >= 0) queries += it.queries;
     else wall_checks += it.queries;
     pen += it.pen;
+    tree += it.tree_queries;
     if (!it.contact) continue;
     Body& A = bodies_[it.a];
     A.f += it.fa;
@@ -597,10 +643,11 @@ void LsdemEngine::compute_forces(double dt) {
       if (wl.id == kPlaten) platen_force_ += dot(it.fa, wl.normal);
     }
     contacts_.push_back(c);
-    hist.emplace(it.key, std::move(it.hist));
   }
-  history_ = std::move(hist);
+  // States of pairs that no longer overlap go.
+  for (auto h = history_.begin(); h != history_.end();) h = h->second.stamp != stamp_ ? history_.erase(h) : std::next(h);
   stats_.node_queries += queries;
+  stats_.tree_queries += tree;
   stats_.wall_node_checks += wall_checks;
   stats_.bbox_overlaps += static_cast<long>(npairs);
   stats_.contact_pairs += pairs_in_contact;
@@ -620,6 +667,7 @@ void LsdemEngine::integrate(double dt) {
     b.v += b.f * (b.im * dt);
     if (dim == 2) b.v.z = 0;
     b.x += b.v * dt;
+    b.moved = norm(b.v) * dt;
     if (dim == 2) {
       b.w.z += b.t.z / b.Ib(2, 2) * dt;
       const double ang = b.w.z * dt;
@@ -635,6 +683,7 @@ void LsdemEngine::integrate(double dt) {
       if (wn > 0) b.q = (Quat::from_axis_angle(b.w, wn * dt) * b.q).normalized();
     }
     b.R = b.q.matrix();
+    b.turned = norm(b.w) * dt;
   }
   // Platen along the vertical axis.
   if (has_container_ && container_.height > 0) {

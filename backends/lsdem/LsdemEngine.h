@@ -36,6 +36,7 @@
 // writing its own slot; forces are then summed in the fixed order of the sorted items, so
 // results are bitwise independent of the thread count.
 #pragma once
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -64,6 +65,7 @@ struct LsdemSettings {
 struct LsdemStats {
   long steps = 0;
   long node_queries = 0;     // level-set lookups of a node (grain–grain)
+  long tree_queries = 0;     // level-set lookups pruning a subtree of nodes
   long wall_node_checks = 0; // node–plane tests
   long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding boxes overlap
   long contact_pairs = 0;    // pairs with at least one penetrating node (summed over steps)
@@ -125,6 +127,22 @@ class LsdemEngine final : public Engine {
     int node;
     Vec3 ft;  // tangential force (N), world frame
   };
+  // Per (master, partner) state kept between steps: tangential history, and the master's
+  // nodes within `skin` of the partner at the last full search with the bound on their
+  // relative motion since (a node moving by d changes φ by at most √dim·d).
+  struct PairState {
+    std::vector<NodeHist> hist;
+    std::vector<int> cand;
+    double drift = 0;
+    bool has_cand = false;
+    long stamp = -1;  // last step that used it
+  };
+  struct KeyHash {
+    std::size_t operator()(const std::pair<GrainId, GrainId>& k) const {
+      const auto a = static_cast<std::uint64_t>(k.first), b = static_cast<std::uint64_t>(k.second);
+      return static_cast<std::size_t>((a * 0x9E3779B97F4A7C15ull) ^ (b + 0x7F4A7C159E3779B9ull + (a << 6) + (a >> 2)));
+    }
+  };
   struct Wall {
     int id;
     Vec3 point, normal;  // normal points into the box
@@ -143,8 +161,9 @@ class LsdemEngine final : public Engine {
   std::map<const Shape*, std::shared_ptr<ShapeData>> shapes_;
   std::vector<Body> bodies_;
   std::unordered_map<GrainId, std::size_t> index_;
-  // Tangential history per (master, partner) key; partner < 0: wall −1 − id.
-  std::map<std::pair<GrainId, GrainId>, std::vector<NodeHist>> history_;
+  // Per (master, partner) key; partner < 0: wall −1 − id.
+  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> history_;
+  long stamp_ = 0;
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
   PlatenCommand platen_cmd_;
