@@ -391,3 +391,50 @@ TEST(Lsdem, BadInput) {
   s.kn = 0;
   EXPECT_THROW(LsdemEngine(s, context(3)), std::invalid_argument);
 }
+
+// 2D end to end: disks, ellipses and polygons (their level sets built from the shapes) fall
+// into a box and settle; the floor then carries the total weight (tolerance 2 %: slow
+// residual motion) and every grain stays inside the box.
+TEST(Lsdem, MixedShapes2DSettleInABox) {
+  LsdemSettings s;
+  s.kn = 1e5;
+  s.damping_ratio = 0.5;
+  s.global_damping = 2;
+  auto ctx = context(2, {0, -9.81, 0});
+  ctx.materials[0].wall_friction = 0.3;
+  LsdemEngine e(s, ctx);
+  Container box;
+  box.lx = 0.5;
+  e.set_container(box);
+  ShapeResolution res;
+  res.level_set_spacing = 0.005;
+  const std::vector<Shape::Ptr> shapes = {
+      Shape::disk(0.04, res), Shape::ellipse(0.05, 0.03, res), Shape::superellipse(0.045, 0.035, 0.5, res),
+      Shape::polygon({{-0.04, -0.03, 0}, {0.05, -0.035, 0}, {0.03, 0.04, 0}, {-0.045, 0.03, 0}}, res)};
+  double mass = 0;
+  const int n = 16;
+  for (int i = 0; i < n; ++i) {
+    Grain g = grain(i, shapes[i % 4], {0.06 + 0.125 * (i % 4), 0.06 + 0.11 * (i / 4), 0},
+                    Quat::from_axis_angle({0, 0, 1}, 0.7 * i));
+    g.velocity = {0.05 * std::sin(i), 0, 0};
+    mass += 1000 * g.shape->volume();
+    e.add_grain(g);
+  }
+  const double dt = e.max_stable_dt();
+  for (int i = 0; i < 20000; ++i) e.step(dt);
+  EXPECT_GT(e.stats().contact_pairs, 0);
+  EXPECT_NEAR(e.floor_force() / (mass * 9.81), 1.0, 0.02);
+  std::vector<Grain> g(n);
+  for (int i = 0; i < n; ++i) g[i].id = i;
+  e.read_state(g);
+  for (const auto& x : g) {
+    EXPECT_GT(x.position.x, 0.0);
+    EXPECT_LT(x.position.x, box.lx);
+    EXPECT_GT(x.position.y, 0.0);
+    EXPECT_LT(x.position.y, 0.4);
+    EXPECT_EQ(x.position.z, 0.0);
+    EXPECT_NEAR(x.orientation.x, 0.0, 1e-15);  // rotation about z only
+    EXPECT_NEAR(x.orientation.y, 0.0, 1e-15);
+  }
+  EXPECT_LT(e.kinetic_energy(), 1e-6 * mass * 9.81 * 0.1);
+}
