@@ -458,8 +458,16 @@ std::shared_ptr<const LevelSetGrid> Shape::level_set_ptr() const {
     const Vec3 ext = bounds_.size();
     const double smallest = dimension_ == 2 ? std::min(ext.x, ext.y) : std::min({ext.x, ext.y, ext.z});
     const double h = res_.level_set_spacing > 0 ? res_.level_set_spacing : smallest / 20.0;
-    ls_ = LevelSetGrid::sample(dimension_, bounds_, h, [this](const Vec3& p) { return signed_distance(p); },
-                               res_.surface_nodes);
+    LevelSetOptions opt;
+    opt.target_nodes = res_.surface_nodes;
+    opt.name = "shape " + describe();
+    // The radial distances of the (super)ellipsoids and (super)ellipses have the exact zero
+    // set but over-estimate |φ| where the surface is oblique to the ray from the centre
+    // (up to 1/cos of that angle: ≈ 40 % at the corners of a boxy superellipsoid). Contact
+    // reads penetration = −φ, so their grids are reinitialised to true distances.
+    opt.exact_distance = !(kind_ == ShapeKind::Ellipsoid || kind_ == ShapeKind::Superellipsoid ||
+                           kind_ == ShapeKind::Ellipse || kind_ == ShapeKind::Superellipse);
+    ls_ = LevelSetGrid::sample(dimension_, bounds_, h, [this](const Vec3& p) { return signed_distance(p); }, opt);
   });
   return ls_;
 }

@@ -75,7 +75,8 @@ class Shape {
   Aabb bounds() const { return bounds_; }
 
   // Negative inside. Exact for sphere, disk, box, polygon and meshes; for the other
-  // analytic shapes a consistent approximation (exact zero set and sign).
+  // analytic shapes a consistent approximation (exact zero set and sign); level_set()
+  // reinitialises their grids to true distances.
   double signed_distance(const Vec3& p) const;
   bool contains(const Vec3& p) const;
 

@@ -2,6 +2,7 @@
 
 #include "crumble_config.h"
 
+#include "backends/lsdem/LsdemEngine.h"
 #include "breakage/none/NoBreakage.h"
 
 namespace crumble {
@@ -38,6 +39,8 @@ template class Table<BuilderFactory>;
 Table<EngineFactory>& engines() {
   static Table<EngineFactory> t = [] {
     Table<EngineFactory> t("engine");
+    t.add({"lsdem", "in-house level-set DEM (seeds/004 §2), explicit, 2D and 3D",
+           [](const Config& c, const EngineContext& ctx) { return make_lsdem_engine(c, ctx); }, {}, {2, 3}});
     return t;
   }();
   return t;

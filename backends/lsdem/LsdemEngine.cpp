@@ -1,0 +1,779 @@
+#include "backends/lsdem/LsdemEngine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "core/Rng.h"
+
+namespace crumble {
+
+// ---- Per-shape data, shared by every grain of the shape (STYLE.md §12) ----
+struct LsdemEngine::ShapeData {
+  // Sphere tree over the nodes (median splits); leaves hold at most kLeaf nodes.
+  struct Cluster {
+    Vec3 c;
+    double r;
+    int begin, end;   // node range
+    int left, right;  // children (-1: leaf)
+  };
+  Shape::Ptr shape;
+  std::shared_ptr<const LevelSetGrid> grid;
+  std::vector<Vec3> nodes;  // body frame, in cluster order
+  std::vector<double> w;    // area (2D: length) per node
+  std::vector<Cluster> clusters;
+  double radius = 0;  // bounding sphere of the zero level (max |node| + h)
+  Aabb box;           // nodes' box + h (body frame)
+  double r_eq = 0;
+  int users = 0;
+};
+
+struct LsdemEngine::Body {
+  GrainId id = -1;
+  ShapeData* sd = nullptr;
+  int material = 0;
+  Vec3 x, v, w;  // centroid, velocity (half step), angular velocity (world, half step)
+  Quat q;
+  Mat3 R;
+  double m = 0, im = 0;
+  Mat3 Ib, iIb;  // body-frame inertia and inverse (3D); 2D uses Ib(2,2)
+  Vec3 f, t;
+  double moved = 0, turned = 0;  // |v|·dt and |ω|·dt of the last step
+};
+
+struct LsdemEngine::Item {
+  int a = -1, b = -1;  // body indices; b < 0: wall index −1 − k
+  std::pair<GrainId, GrainId> key;
+  PairState* st = nullptr;  // persistent state of the key (pointer-stable)
+  bool fresh = true;         // no state from the previous step
+  Vec3 fa, ta, tb;
+  Vec3 point, normal;
+  double fsum = 0;
+  bool contact = false;
+  long queries = 0, pen = 0, tree_queries = 0;
+};
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+Mat3 inverse(const Mat3& a) {
+  Mat3 r;
+  r(0, 0) = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
+  r(0, 1) = a(0, 2) * a(2, 1) - a(0, 1) * a(2, 2);
+  r(0, 2) = a(0, 1) * a(1, 2) - a(0, 2) * a(1, 1);
+  r(1, 0) = a(1, 2) * a(2, 0) - a(1, 0) * a(2, 2);
+  r(1, 1) = a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0);
+  r(1, 2) = a(0, 2) * a(1, 0) - a(0, 0) * a(1, 2);
+  r(2, 0) = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
+  r(2, 1) = a(0, 1) * a(2, 0) - a(0, 0) * a(2, 1);
+  r(2, 2) = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+  const double det = a(0, 0) * r(0, 0) + a(0, 1) * r(1, 0) + a(0, 2) * r(2, 0);
+  if (!(std::abs(det) > 0)) throw std::invalid_argument("lsdem: singular inertia tensor");
+  return r * (1.0 / det);
+}
+
+// Recursive median split of the nodes into a sphere tree (deterministic). Fills `tree` in
+// depth-first order and the node permutation `idx`; returns the index of the subtree root.
+constexpr int kLeaf = 16;
+template <class Cluster>
+int split(std::vector<int>& idx, int lo, int hi, const std::vector<Vec3>& p, std::vector<Cluster>& tree) {
+  Aabb b;
+  for (int i = lo; i < hi; ++i) b.extend(p[idx[i]]);
+  Cluster c{b.center(), 0, lo, hi, -1, -1};
+  for (int i = lo; i < hi; ++i) c.r = std::max(c.r, norm(p[idx[i]] - c.c));
+  const int me = static_cast<int>(tree.size());
+  tree.push_back(c);
+  if (hi - lo <= kLeaf) return me;
+  const Vec3 e = b.size();
+  const int ax = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+  const int mid = (lo + hi) / 2;
+  std::nth_element(idx.begin() + lo, idx.begin() + mid, idx.begin() + hi, [&](int a, int d) {
+    return p[a][ax] < p[d][ax] || (p[a][ax] == p[d][ax] && a < d);
+  });
+  const int l = split(idx, lo, mid, p, tree);
+  const int r = split(idx, mid, hi, p, tree);
+  tree[me].left = l;
+  tree[me].right = r;
+  return me;
+}
+
+struct PenNode {
+  int node;
+  double p;
+  Vec3 n;  // unit normal, world, from the partner towards the master
+  Vec3 c;  // contact point (world): node moved half the penetration out
+  double w;
+};
+
+struct Law {
+  bool hertz = false;
+  double kn = 0;      // linear
+  double khertz = 0;  // (4/3) E* √R*
+  double ks_ratio = 0;
+  double zeta = 0;
+  double mu = 0;
+  double mstar = 0;
+};
+
+}  // namespace
+
+// ---- Construction and grain management ----
+
+LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)), ctx_(std::move(ctx)) {
+  if (ctx_.dimension != 2 && ctx_.dimension != 3) throw std::invalid_argument("lsdem: dimension must be 2 or 3");
+  if (s_.contact_law != "linear" && s_.contact_law != "hertz")
+    throw std::invalid_argument("lsdem: contact_law must be \"linear\" or \"hertz\" (got \"" + s_.contact_law + "\")");
+  if (s_.contact_law == "hertz" && ctx_.dimension == 2)
+    throw std::invalid_argument("lsdem: the hertz contact law is 3D only (2D contacts of cylinders are not Hertzian)");
+  if (!(s_.kn > 0) || !std::isfinite(s_.kn)) throw std::invalid_argument("lsdem: kn must be > 0");
+  if (!(s_.wall_kn >= 0) || !std::isfinite(s_.wall_kn)) throw std::invalid_argument("lsdem: wall_kn must be >= 0");
+  if (!(s_.ks_ratio >= 0)) throw std::invalid_argument("lsdem: ks_ratio must be >= 0");
+  if (!(s_.damping_ratio >= 0)) throw std::invalid_argument("lsdem: damping_ratio must be >= 0");
+  if (!(s_.global_damping >= 0)) throw std::invalid_argument("lsdem: global_damping must be >= 0");
+  if (!(s_.dt_safety > 0)) throw std::invalid_argument("lsdem: dt_safety must be > 0");
+  if (ctx_.materials.empty()) throw std::invalid_argument("lsdem: no material");
+  for (const auto& m : ctx_.materials)
+    if (!(m.density > 0) || !(m.friction >= 0) || !(m.wall_friction >= 0) ||
+        (s_.contact_law == "hertz" && (!(m.young > 0) || !(m.poisson > -1 && m.poisson < 0.5))))
+      throw std::invalid_argument("lsdem: a material has a non-positive density, negative friction or (hertz) a bad "
+                                  "Young's modulus / Poisson ratio");
+  if (s_.threads < 1) s_.threads = 1;
+  if (s_.wall_kn == 0) s_.wall_kn = s_.kn;
+}
+
+LsdemEngine::~LsdemEngine() = default;
+
+std::size_t LsdemEngine::grain_count() const { return bodies_.size(); }
+
+void LsdemEngine::set_container(const Container& c) {
+  if (!(c.lx >= 0) || !(c.ly >= 0) || !(c.height >= 0) || !(c.platen_mass >= 0))
+    throw std::invalid_argument("lsdem: container sizes and platen mass must be >= 0");
+  container_ = c;
+  has_container_ = true;
+  platen_pos_ = c.height;
+  platen_vel_ = 0;
+}
+
+LsdemEngine::ShapeData& LsdemEngine::shape_data(const Shape::Ptr& s) {
+  auto it = shapes_.find(s.get());
+  if (it != shapes_.end()) return *it->second;
+  auto d = std::make_shared<ShapeData>();
+  d->shape = s;
+  d->grid = s->level_set_ptr();
+  const auto& gn = d->grid->nodes();
+  const auto& gw = d->grid->node_weights();
+  std::vector<int> idx(gn.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  if (!gn.empty()) split(idx, 0, static_cast<int>(idx.size()), gn, d->clusters);
+  const double h = d->grid->spacing();
+  for (int i : idx) {
+    d->nodes.push_back(gn[i]);
+    d->w.push_back(gw[i]);
+  }
+  for (const auto& p : d->nodes) {
+    d->radius = std::max(d->radius, norm(p));
+    d->box.extend(p);
+  }
+  d->radius += h;
+  d->box.lo -= Vec3{h, h, ctx_.dimension == 3 ? h : 0.0};
+  d->box.hi += Vec3{h, h, ctx_.dimension == 3 ? h : 0.0};
+  d->r_eq = 0.5 * s->equivalent_diameter();
+  return *(shapes_[s.get()] = d);
+}
+
+void LsdemEngine::add_grain(const Grain& g) {
+  if (!g.shape) throw std::invalid_argument("lsdem: grain " + std::to_string(g.id) + " has no shape");
+  if (g.shape->dimension() != ctx_.dimension)
+    throw std::invalid_argument("lsdem: grain " + std::to_string(g.id) + " shape " + g.shape->describe() + " is " +
+                                std::to_string(g.shape->dimension()) + "D but the engine is " +
+                                std::to_string(ctx_.dimension) + "D");
+  if (g.material < 0 || g.material >= static_cast<int>(ctx_.materials.size()))
+    throw std::invalid_argument("lsdem: grain " + std::to_string(g.id) + " has material index " +
+                                std::to_string(g.material) + " out of range");
+  if (index_.count(g.id)) throw std::invalid_argument("lsdem: grain id " + std::to_string(g.id) + " added twice");
+  if (!is_finite(g.position) || !is_finite(g.velocity) || !is_finite(g.angular_velocity))
+    throw std::invalid_argument("lsdem: grain " + std::to_string(g.id) + " has a non-finite state");
+  ShapeData& sd = shape_data(g.shape);
+  Body b;
+  b.id = g.id;
+  b.sd = &sd;
+  b.sd->users++;
+  b.material = g.material;
+  const double rho = ctx_.materials[g.material].density;
+  b.m = rho * g.shape->volume();
+  b.im = 1.0 / b.m;
+  b.Ib = g.shape->mass_properties().inertia * rho;
+  b.x = g.position;
+  b.v = g.velocity;
+  b.w = g.angular_velocity;
+  b.q = g.orientation.normalized();
+  if (ctx_.dimension == 2) {
+    // Motion in x–y, rotation about z only.
+    b.x.z = 0;
+    b.v.z = 0;
+    b.w = {0, 0, b.w.z};
+    const double c = b.q.w, sz = b.q.z;
+    const double n = std::hypot(c, sz);
+    b.q = n > 0 ? Quat{c / n, 0, 0, sz / n} : Quat{};
+    if (!(b.Ib(2, 2) > 0)) throw std::invalid_argument("lsdem: 2D grain with no polar moment");
+  } else {
+    b.iIb = inverse(b.Ib);
+  }
+  b.R = b.q.matrix();
+  index_[b.id] = bodies_.size();
+  bodies_.push_back(b);
+}
+
+void LsdemEngine::remove_grain(GrainId id) {
+  auto it = index_.find(id);
+  if (it == index_.end()) throw std::invalid_argument("lsdem: remove_grain of unknown grain " + std::to_string(id));
+  const std::size_t k = it->second;
+  ShapeData* sd = bodies_[k].sd;
+  bodies_.erase(bodies_.begin() + static_cast<long>(k));
+  index_.clear();
+  for (std::size_t i = 0; i < bodies_.size(); ++i) index_[bodies_[i].id] = i;
+  if (--sd->users == 0) shapes_.erase(sd->shape.get());
+  // Its pair states go now (a grain added later under the same id starts afresh).
+  for (auto h = history_.begin(); h != history_.end();)
+    h = h->first.first == id || h->first.second == id ? history_.erase(h) : std::next(h);
+}
+
+void LsdemEngine::read_state(std::span<Grain> grains) const {
+  for (auto& g : grains) {
+    auto it = index_.find(g.id);
+    if (it == index_.end()) continue;
+    const Body& b = bodies_[it->second];
+    g.position = b.x;
+    g.orientation = b.q;
+    g.velocity = b.v;
+    g.angular_velocity = b.w;
+  }
+}
+
+double LsdemEngine::kinetic_energy() const {
+  double e = 0;
+  for (const auto& b : bodies_) {
+    e += 0.5 * b.m * norm2(b.v);
+    if (ctx_.dimension == 2) {
+      e += 0.5 * b.Ib(2, 2) * b.w.z * b.w.z;
+    } else {
+      const Vec3 wb = b.R.transposed() * b.w;
+      e += 0.5 * dot(wb, b.Ib * wb);
+    }
+  }
+  return e;
+}
+
+double LsdemEngine::max_stable_dt() const {
+  if (bodies_.empty()) return std::numeric_limits<double>::infinity();
+  double mmin = std::numeric_limits<double>::infinity(), rmin = mmin, rmax = 0;
+  for (const auto& b : bodies_) {
+    mmin = std::min(mmin, b.m);
+    rmin = std::min(rmin, b.sd->r_eq);
+    rmax = std::max(rmax, b.sd->r_eq);
+  }
+  double k = std::max(s_.kn, s_.wall_kn);
+  if (s_.contact_law == "hertz") {
+    // Tangent stiffness dF/dδ = 2 E* √(R* δ) at δ_ref, with the stiffest E* (grain on a
+    // rigid wall) and the largest R* (R* = R for a wall).
+    double estar = 0;
+    for (const auto& m : ctx_.materials) estar = std::max(estar, m.young / (1 - m.poisson * m.poisson));
+    k = 2 * estar * std::sqrt(rmax * s_.hertz_reference_overlap * rmin);
+  }
+  return s_.dt_safety * std::sqrt(mmin / k);
+}
+
+std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
+  std::vector<Wall> w;
+  if (!has_container_) return w;
+  const int u = up();
+  Vec3 e_up, e_x{1, 0, 0}, e_y{0, 1, 0};
+  e_up[u] = 1;
+  w.push_back({kFloor, {}, e_up, {}});
+  if (container_.height > 0) w.push_back({kPlaten, e_up * platen_pos_, -e_up, e_up * platen_vel_});
+  if (container_.lx > 0) {
+    w.push_back({kWallXMin, {}, e_x, {}});
+    w.push_back({kWallXMax, e_x * container_.lx, -e_x, {}});
+  }
+  if (ctx_.dimension == 3 && container_.ly > 0) {
+    w.push_back({kWallYMin, {}, e_y, {}});
+    w.push_back({kWallYMax, e_y * container_.ly, -e_y, {}});
+  }
+  return w;
+}
+
+// ---- One step ----
+
+void LsdemEngine::step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("lsdem: time step must be > 0");
+  const auto t0 = Clock::now();
+  compute_forces(dt);
+  integrate(dt);
+  stats_.steps++;
+  stats_.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+namespace {
+
+// Turns the penetrating nodes of one contact into node forces (see the header): fills the
+// item's force/torque sums, contact summary and new tangential history.
+template <class Item, class Body, class Hist>
+void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Body* B, const Vec3& wall_vel,
+                  double dt, const std::vector<Hist>* old, std::vector<Hist>& hist_out, Item& out) {
+  double S = 0, delta = 0;
+  for (const auto& n : P) {
+    S += n.p * n.w;
+    delta = std::max(delta, n.p);
+  }
+  if (!(S > 0)) return;
+  double Fn, k;
+  if (L.hertz) {
+    Fn = L.khertz * delta * std::sqrt(delta);
+    k = 1.5 * L.khertz * std::sqrt(delta);
+  } else {
+    Fn = L.kn * delta;
+    k = L.kn;
+  }
+  auto vel = [&](const Vec3& c) {
+    Vec3 v = A.v + cross(A.w, c - A.x);
+    if (B) v -= B->v + cross(B->w, c - B->x);
+    else v -= wall_vel;
+    return v;
+  };
+  // Mean normal and normal relative velocity, weighted by the node shares α_i.
+  Vec3 nsum;
+  double vn = 0;
+  for (const auto& n : P) {
+    const double a = n.p * n.w / S;
+    nsum += n.n * a;
+    vn += a * dot(vel(n.c), n.n);
+  }
+  const double Fd = -2 * L.zeta * std::sqrt(L.mstar * k) * vn;
+  const double Ft = std::max(0.0, Fn + Fd);
+  // Spread so that the vector sum of the normal forces has magnitude Ft.
+  const double scale = Ft / std::max(norm(nsum), 0.5);
+  const double ks = L.ks_ratio * k;
+  const double cdamp_t = 2 * L.zeta * std::sqrt(L.mstar * ks);
+  std::size_t o = 0;
+  hist_out.clear();
+  for (const auto& n : P) {
+    const double a = n.p * n.w / S;
+    const double fn = scale * a;
+    Vec3 ft;
+    if (old) {
+      while (o < old->size() && (*old)[o].node < n.node) ++o;
+      if (o < old->size() && (*old)[o].node == n.node) {
+        // Rotate the stored force into the new tangent plane, keeping its magnitude.
+        const Vec3 f0 = (*old)[o].ft;
+        ft = f0 - n.n * dot(f0, n.n);
+        const double l0 = norm(f0), l1 = norm(ft);
+        if (l1 > 0) ft *= l0 / l1;
+      }
+    }
+    const Vec3 v = vel(n.c);
+    const Vec3 vt = v - n.n * dot(v, n.n);
+    ft -= vt * (ks * a * dt);
+    // Tangential viscous damping (same ζ), not stored in the spring; Coulomb caps the sum,
+    // and while sliding the spring holds the capped force.
+    Vec3 tt = ft - vt * (cdamp_t * a);
+    const double cap = L.mu * fn, l = norm(tt);
+    if (l > cap) {
+      tt = l > 0 ? tt * (cap / l) : Vec3{};
+      ft = tt;
+    }
+    hist_out.push_back({n.node, ft});
+    const Vec3 f = n.n * fn + tt;
+    out.fa += f;
+    out.ta += cross(n.c - A.x, f);
+    if (B) out.tb -= cross(n.c - B->x, f);
+    const double fl = norm(f);
+    out.point += n.c * fl;
+    out.fsum += fl;
+    out.normal += n.n * fn;
+  }
+  out.contact = true;
+}
+
+}  // namespace
+
+void LsdemEngine::compute_forces(double dt) {
+  const int dim = ctx_.dimension;
+  const std::size_t nb = bodies_.size();
+  const std::vector<Wall> W = walls();
+
+  // Broad phase: sweep and prune along x over the bounding spheres' boxes.
+  std::vector<int> order(nb);
+  std::iota(order.begin(), order.end(), 0);
+  auto lo = [&](int i, int a) { return bodies_[i].x[a] - bodies_[i].sd->radius; };
+  auto hi = [&](int i, int a) { return bodies_[i].x[a] + bodies_[i].sd->radius; };
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const double la = lo(a, 0), lb = lo(b, 0);
+    return la < lb || (la == lb && bodies_[a].id < bodies_[b].id);
+  });
+  items_.clear();
+  for (std::size_t oi = 0; oi < nb; ++oi) {
+    const int i = order[oi];
+    const double hx = hi(i, 0);
+    for (std::size_t oj = oi + 1; oj < nb; ++oj) {
+      const int j = order[oj];
+      if (lo(j, 0) > hx) break;
+      bool ov = true;
+      for (int a = 1; a < dim && ov; ++a) ov = lo(j, a) <= hi(i, a) && lo(i, a) <= hi(j, a);
+      if (!ov) continue;
+      // Master: the smaller grain (its nodes are looked up in the other's level set).
+      const Body &A = bodies_[i], &B = bodies_[j];
+      const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
+      const bool i_master = va < vb || (va == vb && A.id < B.id);
+      Item it;
+      it.a = i_master ? i : j;
+      it.b = i_master ? j : i;
+      it.key = {bodies_[it.a].id, bodies_[it.b].id};
+      items_.push_back(std::move(it));
+    }
+  }
+  const std::size_t npairs = items_.size();
+  for (std::size_t i = 0; i < nb; ++i)
+    for (std::size_t k = 0; k < W.size(); ++k)
+      if (dot(bodies_[i].x - W[k].point, W[k].normal) < bodies_[i].sd->radius) {
+        Item it;
+        it.a = static_cast<int>(i);
+        it.b = -1 - static_cast<int>(k);
+        it.key = {bodies_[i].id, -1 - W[k].id};
+        items_.push_back(std::move(it));
+      }
+  // (The item order follows the sweep, a function of positions and ids only: deterministic.)
+  ++stamp_;
+  for (auto& it : items_) {
+    auto [h, fresh] = history_.try_emplace(it.key);
+    it.st = &h->second;
+    it.fresh = fresh || h->second.stamp != stamp_ - 1;
+    if (it.fresh) h->second = PairState{};
+    h->second.stamp = stamp_;
+  }
+
+  // Narrow phase, in parallel over items; each writes only its own slot.
+  const long nitems = static_cast<long>(items_.size());
+  const double zeta = s_.damping_ratio;
+  const double lipschitz = std::sqrt(double(dim)) * (1 + 1e-9);
+#pragma omp parallel num_threads(s_.threads)
+  {
+    std::vector<PenNode> P;
+    std::vector<NodeHist> hist_new;
+#pragma omp for schedule(dynamic, 4)
+    for (long ii = 0; ii < nitems; ++ii) {
+      Item& it = items_[ii];
+      const Body& A = bodies_[it.a];
+      const ShapeData& sa = *A.sd;
+      const Material& ma = ctx_.materials[A.material];
+      P.clear();
+      Law L;
+      L.hertz = s_.contact_law == "hertz";
+      L.ks_ratio = s_.ks_ratio;
+      L.zeta = zeta;
+      if (it.b >= 0) {
+        const Body& B = bodies_[it.b];
+        const ShapeData& sb = *B.sd;
+        const LevelSetGrid& gb = *sb.grid;
+        const Mat3 RbT = B.R.transposed();
+        const Mat3 Rab = RbT * A.R;
+        const Vec3 tab = RbT * (A.x - B.x);
+        const double rb = sb.radius;
+        const double skin = 0.5 * gb.spacing();
+        PairState& ps = *it.st;
+        const bool had = !it.fresh && ps.has_cand;
+        const double drift =
+            had ? ps.drift + A.moved + B.moved + A.turned * sa.radius + B.turned * (sa.radius + norm(A.x - B.x)) : 0;
+        auto visit = [&](int i) {
+          Vec3 g;
+          const Vec3 y = Rab * sa.nodes[i] + tab;
+          const double phi = gb.value_gradient(y, g);
+          if (phi >= 0) return;
+          const double gn = norm(g);
+          if (!(gn > 0)) return;
+          const Vec3 n = B.R * (g / gn);
+          const Vec3 X = A.R * sa.nodes[i] + A.x;
+          P.push_back({i, -phi, n, X + n * (-0.5 * phi), sa.w[i]});
+        };
+        if (had && lipschitz * drift < skin) {
+          // No node outside the candidates can have reached the partner since the search.
+          ps.drift = drift;
+          for (int i : ps.cand) {
+            ++it.queries;
+            const Vec3 y = Rab * sa.nodes[i] + tab;
+            if (gb.inside_grid(y) && gb.value_inside(y) < 0) visit(i);
+          }
+        } else {
+          ps.cand.clear();
+          ps.drift = 0;
+          ps.has_cand = true;
+          // Full search: descend the master's node tree, pruning subtrees outside the
+          // partner's bounding sphere or box (in its frame) or farther than the skin.
+          int stack[64];
+          int top = 0;
+          if (!sa.clusters.empty() && norm2(B.x - A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
+          while (top > 0) {
+            const auto& c = sa.clusters[stack[--top]];
+            const Vec3 yc = Rab * c.c + tab;
+            const double reach = c.r + skin;
+            if (norm2(yc) > (reach + rb) * (reach + rb)) continue;
+            bool out = false;
+            for (int a = 0; a < dim && !out; ++a) out = yc[a] + reach < sb.box.lo[a] || yc[a] - reach > sb.box.hi[a];
+            if (out) continue;
+            // Each partial derivative of the trilinear interpolant of 1-Lipschitz samples is
+            // a mean of edge slopes in [−1, 1], so |∇φ| ≤ √dim: the whole sphere is farther
+            // than the skin from the partner when φ(centre) > √dim · r + skin.
+            if (c.r > 0.5 * gb.spacing() || c.left >= 0) {
+              ++it.tree_queries;
+              if ((gb.inside_grid(yc) ? gb.value_inside(yc) : gb.value(yc)) > lipschitz * c.r + skin) continue;
+            }
+            if (c.left >= 0) {
+              stack[top++] = c.right;
+              stack[top++] = c.left;
+              continue;
+            }
+            for (int i = c.begin; i < c.end; ++i) {
+              const Vec3 y = Rab * sa.nodes[i] + tab;
+              bool outside = false;
+              for (int a = 0; a < dim && !outside; ++a)
+                outside = y[a] < sb.box.lo[a] - skin || y[a] > sb.box.hi[a] + skin;
+              if (outside) continue;
+              ++it.queries;
+              const double phi = gb.inside_grid(y) ? gb.value_inside(y) : gb.value(y);
+              if (phi >= skin) continue;
+              ps.cand.push_back(i);
+              if (phi < 0) visit(i);
+            }
+          }
+        }
+        const Material& mb = ctx_.materials[B.material];
+        L.kn = s_.kn;
+        L.mu = std::min(ma.friction, mb.friction);
+        L.mstar = A.m * B.m / (A.m + B.m);
+        if (L.hertz) {
+          const double estar =
+              1.0 / ((1 - ma.poisson * ma.poisson) / ma.young + (1 - mb.poisson * mb.poisson) / mb.young);
+          const double rstar = sa.r_eq * sb.r_eq / (sa.r_eq + sb.r_eq);
+          L.khertz = 4.0 / 3.0 * estar * std::sqrt(rstar);
+        }
+        it.pen = static_cast<long>(P.size());
+        if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, it.fresh ? nullptr : &it.st->hist, hist_new, it);
+      } else {
+        const Wall& wl = W[-1 - it.b];
+        int stack[64];
+        int top = 0;
+        if (!sa.clusters.empty()) stack[top++] = 0;
+        while (top > 0) {
+          const auto& c = sa.clusters[stack[--top]];
+          const Vec3 xc = A.R * c.c + A.x;
+          if (dot(xc - wl.point, wl.normal) > c.r) continue;
+          if (c.left >= 0) {
+            stack[top++] = c.right;
+            stack[top++] = c.left;
+            continue;
+          }
+          for (int i = c.begin; i < c.end; ++i) {
+            const Vec3 X = A.R * sa.nodes[i] + A.x;
+            const double s = dot(X - wl.point, wl.normal);
+            ++it.queries;
+            if (s >= 0) continue;
+            P.push_back({i, -s, wl.normal, X + wl.normal * (-0.5 * s), sa.w[i]});
+          }
+        }
+        L.kn = s_.wall_kn;
+        L.mu = ma.wall_friction;
+        L.mstar = A.m;
+        if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
+        it.pen = static_cast<long>(P.size());
+        if (!P.empty()) patch_forces(P, L, A, static_cast<const Body*>(nullptr), wl.velocity, dt, it.fresh ? nullptr : &it.st->hist,
+                       hist_new, it);
+      }
+      // The new tangential history replaces the old one (empty when out of contact).
+      if (P.empty()) hist_new.clear();
+      std::swap(it.st->hist, hist_new);
+    }
+  }
+
+  // Reduction in the fixed item order.
+  for (auto& b : bodies_) {
+    b.f = ctx_.gravity * b.m;
+    b.t = {};
+    if (s_.global_damping > 0) {
+      b.f -= b.v * (s_.global_damping * b.m);
+      if (dim == 2) {
+        b.t.z -= s_.global_damping * b.Ib(2, 2) * b.w.z;
+      } else {
+        const Vec3 wb = b.R.transposed() * b.w;
+        b.t -= b.R * (b.Ib * wb) * s_.global_damping;
+      }
+    }
+  }
+  contacts_.clear();
+  platen_force_ = 0;
+  floor_force_ = 0;
+  long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
+  for (std::size_t k = 0; k < items_.size(); ++k) {
+    Item& it = items_[k];
+    if (it.b >= 0) queries += it.queries;
+    else wall_checks += it.queries;
+    pen += it.pen;
+    tree += it.tree_queries;
+    if (!it.contact) continue;
+    Body& A = bodies_[it.a];
+    A.f += it.fa;
+    A.t += it.ta;
+    Contact c;
+    c.a = A.id;
+    c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
+    c.normal = normalized(it.normal);
+    c.force = it.fa;
+    if (it.b >= 0) {
+      Body& B = bodies_[it.b];
+      B.f -= it.fa;
+      B.t += it.tb;
+      c.b = B.id;
+      ++pairs_in_contact;
+    } else {
+      const Wall& wl = W[-1 - it.b];
+      c.wall = wl.id;
+      if (wl.id == kFloor) floor_force_ += dot(it.fa, wl.normal);
+      if (wl.id == kPlaten) platen_force_ += dot(it.fa, wl.normal);
+    }
+    contacts_.push_back(c);
+  }
+  // States of pairs that no longer overlap go.
+  for (auto h = history_.begin(); h != history_.end();) h = h->second.stamp != stamp_ ? history_.erase(h) : std::next(h);
+  stats_.node_queries += queries;
+  stats_.tree_queries += tree;
+  stats_.wall_node_checks += wall_checks;
+  stats_.bbox_overlaps += static_cast<long>(npairs);
+  stats_.contact_pairs += pairs_in_contact;
+  stats_.penetrating_nodes += pen;
+  stats_.last_bbox_overlaps = static_cast<long>(npairs);
+  stats_.last_contact_pairs = pairs_in_contact;
+  stats_.last_node_queries = queries;
+}
+
+void LsdemEngine::integrate(double dt) {
+  const int dim = ctx_.dimension;
+  const long n = static_cast<long>(bodies_.size());
+#pragma omp parallel for schedule(static) num_threads(s_.threads)
+  for (long i = 0; i < n; ++i) {
+    Body& b = bodies_[i];
+    // Leapfrog: v(t+dt/2) = v(t−dt/2) + a(t) dt, x(t+dt) = x(t) + v(t+dt/2) dt.
+    b.v += b.f * (b.im * dt);
+    if (dim == 2) b.v.z = 0;
+    b.x += b.v * dt;
+    b.moved = norm(b.v) * dt;
+    if (dim == 2) {
+      b.w.z += b.t.z / b.Ib(2, 2) * dt;
+      const double ang = b.w.z * dt;
+      if (ang != 0) b.q = (Quat{std::cos(0.5 * ang), 0, 0, std::sin(0.5 * ang)} * b.q).normalized();
+    } else {
+      // Euler's equations in the body frame: I ω̇ = τ − ω × Iω.
+      const Mat3 RT = b.R.transposed();
+      Vec3 wb = RT * b.w;
+      const Vec3 tb = RT * b.t;
+      wb += b.iIb * (tb - cross(wb, b.Ib * wb)) * dt;
+      b.w = b.R * wb;
+      const double wn = norm(b.w);
+      if (wn > 0) b.q = (Quat::from_axis_angle(b.w, wn * dt) * b.q).normalized();
+    }
+    b.R = b.q.matrix();
+    b.turned = norm(b.w) * dt;
+  }
+  // Platen along the vertical axis.
+  if (has_container_ && container_.height > 0) {
+    if (platen_cmd_.mode == PlatenCommand::Mode::Velocity) {
+      platen_vel_ = platen_cmd_.value;
+    } else {
+      double M = container_.platen_mass;
+      if (!(M > 0)) {
+        M = 0;
+        for (const auto& b : bodies_) M += b.m;
+      }
+      if (M > 0) {
+        // Grains push it up with platen_force_, the command pushes it down.
+        const double acc = (platen_force_ - platen_cmd_.value) / M - s_.global_damping * platen_vel_;
+        platen_vel_ += acc * dt;
+      }
+    }
+    platen_pos_ += platen_vel_ * dt;
+  }
+}
+
+// ---- Factory and benchmark ----
+
+std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx) {
+  cfg.string("type", "lsdem");
+  LsdemSettings s;
+  s.contact_law = cfg.choice("contact_law", s.contact_law, {"linear", "hertz"});
+  s.kn = cfg.positive("kn", s.kn);
+  s.ks_ratio = cfg.number("ks_ratio", s.ks_ratio, 0, 10);
+  s.wall_kn = cfg.number("wall_kn", s.wall_kn, 0);
+  s.damping_ratio = cfg.number("damping_ratio", s.damping_ratio, 0, 10);
+  s.global_damping = cfg.number("global_damping", s.global_damping, 0);
+  s.dt_safety = cfg.number("dt_safety", s.dt_safety, 1e-6, 2);
+  s.hertz_reference_overlap = cfg.number("hertz_reference_overlap", s.hertz_reference_overlap, 1e-9, 0.5);
+  s.threads = std::max(1, ctx.threads);
+  if (s.contact_law == "hertz" && ctx.dimension == 2)
+    cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
+  return std::make_unique<LsdemEngine>(s, ctx);
+}
+
+void lsdem_bench_scene(LsdemEngine& e, const LsdemBenchScene& sc) {
+  if (sc.grains <= 0 || sc.nodes <= 0 || sc.shapes <= 0 || sc.per_row <= 0 || !(sc.radius > 0))
+    throw std::invalid_argument("lsdem_bench_scene: counts and radius must be > 0");
+  if (e.grain_count() != 0) throw std::invalid_argument("lsdem_bench_scene: the engine must be empty");
+  Rng rng(sc.seed);
+  std::vector<Shape::Ptr> shapes;
+  for (int i = 0; i < sc.shapes; ++i) {
+    const Vec3 r{sc.radius * rng.uniform(0.8, 1.2), sc.radius * rng.uniform(0.8, 1.2),
+                 sc.radius * rng.uniform(0.8, 1.2)};
+    ShapeResolution res;
+    res.surface_nodes = sc.nodes;
+    shapes.push_back(Shape::superellipsoid(r, rng.uniform(0.4, 1.2), rng.uniform(0.4, 1.2), res));
+  }
+  const double a = 2.6 * sc.radius;
+  Container box;
+  box.lx = box.ly = a * sc.per_row;
+  e.set_container(box);
+  for (int i = 0; i < sc.grains; ++i) {
+    Grain g;
+    g.id = i;
+    g.shape = shapes[i % sc.shapes];
+    const int ix = i % sc.per_row, iy = (i / sc.per_row) % sc.per_row, iz = i / (sc.per_row * sc.per_row);
+    g.position = {a * (ix + 0.5), a * (iy + 0.5), a * (iz + 0.5) + 0.2 * sc.radius};
+    g.orientation = Quat::from_axis_angle({rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)},
+                                          rng.uniform(0, 2 * kPi));
+    g.velocity = Vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)} * 0.05;
+    e.add_grain(g);
+  }
+}
+
+LsdemBenchResult lsdem_bench_phase(LsdemEngine& e, long steps, double dt) {
+  if (steps <= 0) throw std::invalid_argument("lsdem_bench_phase: steps must be > 0");
+  if (dt <= 0) dt = e.max_stable_dt();
+  if (!std::isfinite(dt)) throw std::invalid_argument("lsdem_bench_phase: no grains (no stable step)");
+  e.reset_stats();
+  const auto t0 = Clock::now();
+  for (long i = 0; i < steps; ++i) e.step(dt);
+  const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
+  const LsdemStats& st = e.stats();
+  LsdemBenchResult r;
+  r.steps = steps;
+  r.seconds = sec;
+  r.ms_per_step = 1e3 * sec / steps;
+  r.steps_per_second = steps / sec;
+  r.node_queries_per_second = st.node_queries / sec;
+  r.mean_bbox_overlaps = double(st.bbox_overlaps) / steps;
+  r.mean_contact_pairs = double(st.contact_pairs) / steps;
+  r.mean_node_queries = double(st.node_queries) / steps;
+  r.threads = e.settings().threads;
+  return r;
+}
+
+}  // namespace crumble

@@ -1,0 +1,198 @@
+// `lsdem`: the in-house level-set DEM engine (seeds/004 §2; Kawamoto et al. 2016), 2D and 3D.
+//
+// Grains are rigid bodies carrying a shared LevelSetGrid (signed distance, negative inside)
+// and its surface nodes with area (2D: length) weights. A contact between grains a and b is
+// found by looking up the nodes of the smaller grain (the master) in the other's level set:
+// penetration p_i = −φ_b(x_i), normal n_i = ∇φ_b/|∇φ_b| (seeds/004 eqs. 3–4).
+//
+// Contact law (our decision, METHODS.md §4 leaves it open). Per contact (grain pair, or
+// grain and wall) the overlap is the deepest node penetration δ = max p_i and the normal
+// force follows a point-contact law, F_n = k_n·δ ("linear") or (4/3)·E*·√R*·δ^{3/2}
+// ("hertz", R* from the grains' equivalent radii). F_n is then spread over the penetrating
+// nodes in proportion to p_i·w_i (penetration × node area), each node pushing along its own
+// normal. Because the node areas weight the spread and δ is a point value, the total force,
+// its point of application and its moment converge as the nodes are refined, and k_n keeps
+// the units of the paper's tables (N/m; in 2D per metre of thickness). Each node also
+// carries a tangential spring (incremental, stiffness ks_ratio·k·α_i with α_i the node's
+// share) capped by Coulomb friction μ·|f_n,i|; its history is kept per (node, partner).
+// Viscous damping with critical-damping ratio ζ: normal F_d = −2ζ·√(m*·k)·v_n (the total
+// normal force clipped at zero: no cohesion), tangential −2ζ·√(m*·k_s)·v_t (spread like the
+// springs, not stored, inside the Coulomb cap). Global damping −C_g·m·v and −C_g·I·ω.
+//
+// Integration: leapfrog (velocities at half steps), quaternions in 3D with the gyroscopic
+// term, a rotation angle about z in 2D. 2D: motion in x–y, gravity from the context
+// (normally −y), floor y = 0, walls x = 0, lx, platen moving along y; 3D: floor z = 0, walls
+// x = 0, lx and y = 0, ly, platen along z. Walls act on every node of a grain that lies
+// behind the plane.
+//
+// Stable step: max_stable_dt() = dt_safety · √(m_min / k_max), m_min the lightest grain,
+// k_max the largest normal stiffness (linear: max(kn, wall_kn); hertz: the tangent
+// stiffness 2·E*·√(R*·δ_ref) at δ_ref = hertz_reference_overlap · smallest equivalent radius).
+// A single contact of a grain on a fixed wall is stable below 2·√(m/k); dt_safety = 0.1
+// leaves room for several simultaneous contacts and keeps the energy error of an undamped
+// impact (force onset between steps, deepest node changing) below 1 %.
+//
+// Determinism: the narrow phase runs in parallel over (pair | grain–wall) work items, each
+// writing its own slot; forces are then summed in the fixed order of the sorted items, so
+// results are bitwise independent of the thread count.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "core/Config.h"
+#include "core/Engine.h"
+#include "geometry/LevelSetGrid.h"
+
+namespace crumble {
+
+struct LsdemSettings {
+  std::string contact_law = "linear";  // "linear" | "hertz" (hertz: 3D only)
+  double kn = 4e7;                      // N/m, grain–grain normal stiffness (seeds/004 Table 2)
+  double ks_ratio = 0.6;                // k_s / k_n (seeds/004 Table 2)
+  double wall_kn = 0;                   // N/m, grain–wall; 0 = kn
+  double damping_ratio = 0.4;           // normal critical-damping ratio ζ (seeds/004 Table 1 C_res)
+  double global_damping = 0;            // C_g, 1/s (seeds/004 Tables 1–2)
+  double dt_safety = 0.1;               // fraction of √(m_min/k_max)
+  double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
+  int threads = 1;
+};
+
+// Work counters for benchmarks. Cumulative since construction or reset_stats().
+struct LsdemStats {
+  long steps = 0;
+  long node_queries = 0;     // level-set lookups of a node (grain–grain)
+  long tree_queries = 0;     // level-set lookups pruning a subtree of nodes
+  long wall_node_checks = 0; // node–plane tests
+  long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding boxes overlap
+  long contact_pairs = 0;    // pairs with at least one penetrating node (summed over steps)
+  long penetrating_nodes = 0;
+  double seconds = 0;        // wall time inside step()
+  // Last step only.
+  long last_bbox_overlaps = 0;
+  long last_contact_pairs = 0;
+  long last_node_queries = 0;
+};
+
+struct LsdemBenchResult {
+  long steps = 0;
+  double seconds = 0;
+  double ms_per_step = 0;
+  double steps_per_second = 0;
+  double node_queries_per_second = 0;
+  double mean_bbox_overlaps = 0;  // per step
+  double mean_contact_pairs = 0;  // per step
+  double mean_node_queries = 0;   // per step
+  int threads = 1;
+};
+
+class LsdemEngine final : public Engine {
+ public:
+  LsdemEngine(LsdemSettings s, EngineContext ctx);
+  ~LsdemEngine() override;
+
+  std::string name() const override { return "lsdem"; }
+  void set_container(const Container& c) override;
+  void add_grain(const Grain& g) override;
+  void remove_grain(GrainId id) override;
+  std::size_t grain_count() const override;
+
+  void step(double dt) override;
+  double max_stable_dt() const override;
+
+  void read_state(std::span<Grain> grains) const override;
+  std::vector<Contact> contacts() const override { return contacts_; }
+
+  void set_platen(const PlatenCommand& cmd) override { platen_cmd_ = cmd; }
+  double platen_position() const override { return platen_pos_; }
+  double platen_force() const override { return platen_force_; }
+  double floor_force() const override { return floor_force_; }
+
+  const LsdemSettings& settings() const { return s_; }
+  const LsdemStats& stats() const { return stats_; }
+  void reset_stats() { stats_ = LsdemStats{}; }
+  void set_threads(int n) { s_.threads = n < 1 ? 1 : n; }
+  // Kinetic energy (J; 2D: per metre) of the grains, translational + rotational.
+  double kinetic_energy() const;
+
+  struct ShapeData;
+  struct Body;
+  struct Item;
+
+ private:
+  struct NodeHist {
+    int node;
+    Vec3 ft;  // tangential force (N), world frame
+  };
+  // Per (master, partner) state kept between steps: tangential history, and the master's
+  // nodes within `skin` of the partner at the last full search with the bound on their
+  // relative motion since (a node moving by d changes φ by at most √dim·d).
+  struct PairState {
+    std::vector<NodeHist> hist;
+    std::vector<int> cand;
+    double drift = 0;
+    bool has_cand = false;
+    long stamp = -1;  // last step that used it
+  };
+  struct KeyHash {
+    std::size_t operator()(const std::pair<GrainId, GrainId>& k) const {
+      const auto a = static_cast<std::uint64_t>(k.first), b = static_cast<std::uint64_t>(k.second);
+      return static_cast<std::size_t>((a * 0x9E3779B97F4A7C15ull) ^ (b + 0x7F4A7C159E3779B9ull + (a << 6) + (a >> 2)));
+    }
+  };
+  struct Wall {
+    int id;
+    Vec3 point, normal;  // normal points into the box
+    Vec3 velocity;
+  };
+  ShapeData& shape_data(const Shape::Ptr& s);
+  void compute_forces(double dt);
+  void integrate(double dt);
+  std::vector<Wall> walls() const;
+  int up() const { return ctx_.dimension == 3 ? 2 : 1; }
+
+  LsdemSettings s_;
+  EngineContext ctx_;
+  Container container_;
+  bool has_container_ = false;
+  std::map<const Shape*, std::shared_ptr<ShapeData>> shapes_;
+  std::vector<Body> bodies_;
+  std::unordered_map<GrainId, std::size_t> index_;
+  // Per (master, partner) key; partner < 0: wall −1 − id.
+  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> history_;
+  long stamp_ = 0;
+  std::vector<Item> items_;
+  std::vector<Contact> contacts_;
+  PlatenCommand platen_cmd_;
+  double platen_pos_ = 0, platen_vel_ = 0, platen_force_ = 0, floor_force_ = 0;
+  LsdemStats stats_;
+};
+
+// Factory for the registry: cfg is the scenario's "engine" object. Keys (defaults):
+// contact_law "linear" | "hertz", kn 4e7 N/m, ks_ratio 0.6, wall_kn 0 (= kn),
+// damping_ratio 0.4, global_damping 0 1/s, dt_safety 0.1, hertz_reference_overlap 0.01.
+std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx);
+
+// The speed benchmark's scene (after YADE's examples/levelSet/discharge.py): `grains`
+// superellipsoids (radii `radius`·U(0.8, 1.2) per axis, exponents U(0.4, 1.2), drawn among
+// `shapes` distinct shapes with `nodes` surface nodes each) on a cubic lattice of spacing
+// 2.6·radius above the floor of a box whose side holds `per_row` grains; they are given a
+// small random velocity and fall. Sets the container (no platen); the engine must be empty.
+struct LsdemBenchScene {
+  int grains = 1000;
+  int nodes = 2000;
+  int shapes = 10;
+  int per_row = 10;
+  double radius = 5e-3;  // m
+  std::uint64_t seed = 1;
+};
+void lsdem_bench_scene(LsdemEngine& engine, const LsdemBenchScene& scene);
+
+// Runs `steps` steps of `dt` (0 = the engine's max_stable_dt()) and reports speed and the
+// work counters of that phase (the engine's stats are reset first).
+LsdemBenchResult lsdem_bench_phase(LsdemEngine& engine, long steps, double dt = 0);
+
+}  // namespace crumble
