@@ -369,3 +369,55 @@ TriMesh convex_hull(const std::vector<Vec3>& points) {
 }
 
 }  // namespace crumble
+
+namespace crumble {
+
+double convex_inradius_about_centroid(const TriMesh& convex) {
+  const Vec3 o = polyhedron_mass_properties(convex).centroid;
+  double r = std::numeric_limits<double>::infinity();
+  for (const auto& t : convex.triangles) {
+    const Vec3 n = cross(convex.vertices[t[1]] - convex.vertices[t[0]], convex.vertices[t[2]] - convex.vertices[t[0]]);
+    const double len = norm(n);
+    if (len > 0) r = std::min(r, dot(n / len, convex.vertices[t[0]] - o));
+  }
+  return r;
+}
+
+std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) {
+  if (!(distance >= 0) || !std::isfinite(distance))
+    throw std::invalid_argument("inset_convex_vertices: distance must be finite and >= 0");
+  const double inradius = convex_inradius_about_centroid(convex);
+  if (!(distance < inradius))
+    throw std::invalid_argument("inset_convex_vertices: inset distance " + std::to_string(distance) +
+                                " is not smaller than the distance from the centroid to the nearest face (" +
+                                std::to_string(inradius) + ")");
+  // Per vertex, the displacement d minimising Σ_j (n_j·d + distance)² over its incident
+  // triangles j (normal equations, lightly regularised so that a vertex whose faces are
+  // nearly coplanar moves along their common normal and not sideways).
+  const std::size_t nv = convex.vertices.size();
+  std::vector<Mat3> normal_matrix(nv, Mat3::zero());
+  std::vector<Vec3> rhs(nv);
+  for (const auto& t : convex.triangles) {
+    const Vec3 n = cross(convex.vertices[t[1]] - convex.vertices[t[0]], convex.vertices[t[2]] - convex.vertices[t[0]]);
+    const double len = norm(n);
+    if (!(len > 0)) continue;
+    const Vec3 u = n / len;
+    for (int k = 0; k < 3; ++k) {
+      normal_matrix[t[k]] += Mat3::outer(u, u);
+      rhs[t[k]] -= u * distance;
+    }
+  }
+  std::vector<Vec3> out(convex.vertices);
+  for (std::size_t v = 0; v < nv; ++v) {
+    Mat3 a = normal_matrix[v] + Mat3::identity() * (1e-12 * normal_matrix[v].trace());
+    // Solve the 3x3 system by the adjugate (a is symmetric positive definite).
+    const Vec3 c0{a(0, 0), a(1, 0), a(2, 0)}, c1{a(0, 1), a(1, 1), a(2, 1)}, c2{a(0, 2), a(1, 2), a(2, 2)};
+    const double det = dot(c0, cross(c1, c2));
+    if (!(std::abs(det) > 0)) continue;  // isolated vertex: no incident face
+    const Vec3& b = rhs[v];
+    out[v] += Vec3{dot(b, cross(c1, c2)), dot(c0, cross(b, c2)), dot(c0, cross(c1, b))} / det;
+  }
+  return out;
+}
+
+}  // namespace crumble

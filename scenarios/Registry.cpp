@@ -3,6 +3,9 @@
 #include "crumble_config.h"
 
 #include "breakage/none/NoBreakage.h"
+#if CRUMBLE_WITH_BULLET
+#include "backends/bullet/BulletEngine.h"
+#endif
 
 namespace crumble {
 
@@ -38,6 +41,10 @@ template class Table<BuilderFactory>;
 Table<EngineFactory>& engines() {
   static Table<EngineFactory> t = [] {
     Table<EngineFactory> t("engine");
+#if CRUMBLE_WITH_BULLET
+    t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (seeds/000)",
+           [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3}});
+#endif
     return t;
   }();
   return t;

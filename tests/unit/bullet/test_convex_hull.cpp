@@ -132,3 +132,38 @@ TEST(ConvexHull, LatticeWithManyCoplanarPointsGivesTheBox) {
   EXPECT_EQ(hr.vertices.size(), 8u);
   expect_valid(hr);
 }
+
+TEST(ConvexHull, InsetMovesEveryFacePlaneInwardsByTheDistance) {
+  // Largest shift of each original face plane after the inset, over all faces (min, max).
+  auto plane_shifts = [](const TriMesh& h, const std::vector<Vec3>& moved) {
+    double lo = 1e300, hi = -1e300;
+    for (const auto& t : h.triangles) {
+      const Vec3 n = normalized(cross(h.vertices[t[1]] - h.vertices[t[0]], h.vertices[t[2]] - h.vertices[t[0]]));
+      double top = -1e300;
+      for (const auto& p : moved) top = std::max(top, dot(n, p - h.vertices[t[0]]));
+      lo = std::min(lo, top);
+      hi = std::max(hi, top);
+    }
+    return std::pair{lo, hi};
+  };
+  // Box: three faces per corner, exact.
+  const TriMesh box = Shape::box({1.0, 2.0, 0.5})->convex_hull();
+  const auto in = inset_convex_vertices(box, 0.1);
+  ASSERT_EQ(in.size(), 8u);
+  EXPECT_NEAR(polyhedron_mass_properties(convex_hull(in)).volume, 8 * 0.9 * 1.9 * 0.4, 1e-10);
+  auto [blo, bhi] = plane_shifts(box, in);
+  EXPECT_NEAR(blo, -0.1, 1e-12);
+  EXPECT_NEAR(bhi, -0.1, 1e-12);
+  // Icosphere grain (5 or 6 faces per vertex): every face plane moves in by the distance
+  // within 2 % of it, and the vertex count stays 42.
+  const TriMesh ico = Shape::sphere(1e-3)->convex_hull();
+  const double d = 2e-5;
+  const auto ii = inset_convex_vertices(ico, d);
+  ASSERT_EQ(ii.size(), 42u);
+  auto [ilo, ihi] = plane_shifts(ico, ii);
+  EXPECT_NEAR(ilo, -d, 0.02 * d);
+  EXPECT_NEAR(ihi, -d, 0.02 * d);
+  EXPECT_NEAR(convex_inradius_about_centroid(box), 0.5, 1e-15);
+  EXPECT_THROW(inset_convex_vertices(box, 0.5), std::invalid_argument);
+  EXPECT_THROW(inset_convex_vertices(box, -0.1), std::invalid_argument);
+}
