@@ -1,7 +1,423 @@
+// 3D convex hull: incremental quickhull (Barber, Dobkin & Huhdanpaa 1996) with a relative
+// distance tolerance, without facet merging. Coplanar neighbours stay separate triangles;
+// points on or within the tolerance of the hull are never vertices, and a final pass drops
+// hull vertices that are not extreme (a point in the middle of a face or an edge that was
+// picked before the corners around it) and rebuilds from the extreme points only.
 #include "geometry/ConvexHull.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace crumble {
-TriMesh convex_hull(const std::vector<Vec3>&) { throw std::logic_error("convex_hull: not implemented yet"); }
+namespace {
+
+struct Face {
+  std::array<int, 3> v;    // point indices, counter-clockwise seen from outside
+  std::array<int, 3> nb;   // neighbour across edge (v[i], v[i+1])
+  Vec3 n;                  // unit outward normal
+  double off = 0;          // n·x = off on the plane
+  std::vector<int> outside;  // conflict list: points strictly above this face
+  bool alive = true;
+};
+
+class Quickhull {
+ public:
+  Quickhull(const std::vector<Vec3>& pts, const std::vector<int>& use) : use_(use) {
+    // Work in coordinates centred on the bounding box: rounding of the plane tests then
+    // scales with the cloud's size, not with its distance from the origin.
+    Aabb box;
+    for (int i : use_) box.extend(pts[i]);
+    const Vec3 c = box.center();
+    p_.resize(pts.size());
+    double maxabs[3] = {0, 0, 0};
+    for (int i : use_) {
+      p_[i] = pts[i] - c;
+      for (int k = 0; k < 3; ++k) maxabs[k] = std::max(maxabs[k], std::abs(pts[i][k]));
+    }
+    size_ = norm(box.size());
+    // Relative tolerance as in qhull: a few ulps of the input coordinates' magnitudes
+    // (points far from the origin carry that much rounding from whoever computed them).
+    eps_ = 8 * std::numeric_limits<double>::epsilon() * (maxabs[0] + maxabs[1] + maxabs[2]);
+  }
+
+  void run() {
+    initial_simplex();
+    // Only faces created by add_point receive points, so every face before the last one
+    // processed has an empty conflict list for good: the scan resumes from there.
+    std::size_t cursor = 0;
+    for (;;) {
+      int f = -1;
+      for (std::size_t i = cursor; i < faces_.size(); ++i)
+        if (faces_[i].alive && !faces_[i].outside.empty()) {
+          f = static_cast<int>(i);
+          break;
+        }
+      if (f < 0) break;
+      cursor = static_cast<std::size_t>(f);
+      // Eye point: the farthest point above f (lowest index on ties → deterministic).
+      int eye = -1;
+      double best = -1;
+      for (int q : faces_[f].outside) {
+        const double d = dist(faces_[f], q);
+        if (d > best) {
+          best = d;
+          eye = q;
+        }
+      }
+      add_point(f, eye);
+    }
+  }
+
+  // Hull with original point indices.
+  std::vector<std::array<int, 3>> triangles() const {
+    std::vector<std::array<int, 3>> t;
+    for (const auto& f : faces_)
+      if (f.alive) t.push_back(f.v);
+    return t;
+  }
+
+  double eps() const { return eps_; }
+
+ private:
+  double dist(const Face& f, int q) const { return dot(f.n, p_[q]) - f.off; }
+
+  bool make_plane(Face& f) const {
+    const Vec3& a = p_[f.v[0]];
+    const Vec3& b = p_[f.v[1]];
+    const Vec3& c = p_[f.v[2]];
+    // Cross product of the two edges leaving the vertex opposite the longest edge keeps
+    // the rounding error smallest.
+    const Vec3 e0 = b - a, e1 = c - b, e2 = a - c;
+    const double l0 = norm2(e0), l1 = norm2(e1), l2 = norm2(e2);
+    Vec3 n;
+    if (l0 >= l1 && l0 >= l2) n = cross(e1, e2);       // longest a-b: use vertex c
+    else if (l1 >= l0 && l1 >= l2) n = cross(e2, e0);  // longest b-c: use vertex a
+    else n = cross(e0, e1);                            // longest c-a: use vertex b
+    const double len = norm(n);
+    if (!(len > 0)) return false;
+    f.n = n / len;
+    f.off = (dot(f.n, a) + dot(f.n, b) + dot(f.n, c)) / 3.0;
+    return true;
+  }
+
+  void initial_simplex() {
+    // Two points far apart: extremes along the axis of largest spread.
+    int i0 = use_[0], i1 = use_[0];
+    double spread = -1;
+    for (int k = 0; k < 3; ++k) {
+      int lo = use_[0], hi = use_[0];
+      for (int i : use_) {
+        if (p_[i][k] < p_[lo][k]) lo = i;
+        if (p_[i][k] > p_[hi][k]) hi = i;
+      }
+      if (p_[hi][k] - p_[lo][k] > spread) {
+        spread = p_[hi][k] - p_[lo][k];
+        i0 = lo;
+        i1 = hi;
+      }
+    }
+    const double flat_tol = 1e-10 * size_;
+    if (!(spread > flat_tol)) throw std::invalid_argument("convex_hull: all points coincide");
+    // Farthest from the line i0-i1.
+    const Vec3 dir = normalized(p_[i1] - p_[i0]);
+    int i2 = -1;
+    double best = -1;
+    for (int i : use_) {
+      const Vec3 r = p_[i] - p_[i0];
+      const double d = norm(r - dir * dot(r, dir));
+      if (d > best) {
+        best = d;
+        i2 = i;
+      }
+    }
+    if (!(best > flat_tol)) throw std::invalid_argument("convex_hull: the points are collinear (flat cloud)");
+    // Farthest from the plane i0-i1-i2.
+    const Vec3 pn = normalized(cross(p_[i1] - p_[i0], p_[i2] - p_[i0]));
+    int i3 = -1;
+    best = -1;
+    for (int i : use_) {
+      const double d = std::abs(dot(pn, p_[i] - p_[i0]));
+      if (d > best) {
+        best = d;
+        i3 = i;
+      }
+    }
+    if (!(best > flat_tol) || !(best > 4 * eps_))
+      throw std::invalid_argument("convex_hull: the points are coplanar (flat cloud)");
+    // Orient so that i3 is below the face (i0, i1, i2).
+    if (dot(pn, p_[i3] - p_[i0]) > 0) std::swap(i1, i2);
+    const int a = i0, b = i1, c = i2, d = i3;
+    // Faces of the tetrahedron, outward: (a,b,c) has d below it.
+    const std::array<std::array<int, 3>, 4> tv = {{{a, b, c}, {a, d, b}, {b, d, c}, {c, d, a}}};
+    for (const auto& v : tv) {
+      Face f;
+      f.v = v;
+      f.nb = {-1, -1, -1};
+      if (!make_plane(f)) throw std::invalid_argument("convex_hull: degenerate initial simplex");
+      faces_.push_back(std::move(f));
+    }
+    link_all();
+    std::vector<int> rest;
+    for (int i : use_)
+      if (i != a && i != b && i != c && i != d) rest.push_back(i);
+    assign(rest, {0, 1, 2, 3});
+  }
+
+  // Neighbour links of the live faces by matching opposite directed edges.
+  void link_all() {
+    std::map<std::pair<int, int>, std::pair<int, int>> edge;  // (u,v) -> (face, slot)
+    for (std::size_t fi = 0; fi < faces_.size(); ++fi) {
+      if (!faces_[fi].alive) continue;
+      for (int k = 0; k < 3; ++k) edge[{faces_[fi].v[k], faces_[fi].v[(k + 1) % 3]}] = {static_cast<int>(fi), k};
+    }
+    for (std::size_t fi = 0; fi < faces_.size(); ++fi) {
+      if (!faces_[fi].alive) continue;
+      for (int k = 0; k < 3; ++k) {
+        auto it = edge.find({faces_[fi].v[(k + 1) % 3], faces_[fi].v[k]});
+        faces_[fi].nb[k] = it == edge.end() ? -1 : it->second.first;
+      }
+    }
+  }
+
+  void assign(const std::vector<int>& pts, const std::vector<int>& candidates) {
+    for (int q : pts) {
+      // The face the point is farthest above (ties → first), so conflict lists stay small.
+      int best_f = -1;
+      double best_d = eps_;
+      for (int f : candidates) {
+        const double d = dist(faces_[f], q);
+        if (d > best_d) {
+          best_d = d;
+          best_f = f;
+        }
+      }
+      if (best_f >= 0) faces_[best_f].outside.push_back(q);
+    }
+  }
+
+  void add_point(int start, int eye) {
+    // Faces visible from the eye, by flood fill from `start` (connected by construction).
+    std::vector<int> visible{start};
+    std::vector<char> is_vis(faces_.size(), 0);
+    is_vis[start] = 1;
+    for (std::size_t k = 0; k < visible.size(); ++k) {
+      const Face& f = faces_[visible[k]];
+      for (int j = 0; j < 3; ++j) {
+        const int g = f.nb[j];
+        if (g >= 0 && !is_vis[g] && dist(faces_[g], eye) > eps_) {
+          is_vis[g] = 1;
+          visible.push_back(g);
+        }
+      }
+    }
+    // Horizon edges (u, v) as oriented in the visible face, with the hidden face across.
+    struct HEdge {
+      int u, v, hidden;
+    };
+    std::vector<HEdge> horizon;
+    for (int fi : visible)
+      for (int j = 0; j < 3; ++j) {
+        const int g = faces_[fi].nb[j];
+        if (g < 0 || !is_vis[g]) horizon.push_back({faces_[fi].v[j], faces_[fi].v[(j + 1) % 3], g});
+      }
+    std::vector<int> orphans;
+    for (int fi : visible) {
+      faces_[fi].alive = false;
+      for (int q : faces_[fi].outside)
+        if (q != eye) orphans.push_back(q);
+      faces_[fi].outside.clear();
+      faces_[fi].outside.shrink_to_fit();
+    }
+    std::vector<int> created;
+    std::map<std::pair<int, int>, std::pair<int, int>> open;  // directed edge -> (face, slot)
+    for (const auto& h : horizon) {
+      Face f;
+      f.v = {h.u, h.v, eye};
+      f.nb = {h.hidden, -1, -1};
+      if (!make_plane(f)) {
+        // Eye collinear with a horizon edge: keep the hidden face's plane so the mesh
+        // stays closed; the triangle has zero area and is dropped by the cleanup pass.
+        f.n = h.hidden >= 0 ? faces_[h.hidden].n : Vec3{0, 0, 1};
+        f.off = dot(f.n, p_[h.u]);
+      }
+      const int id = static_cast<int>(faces_.size());
+      faces_.push_back(std::move(f));
+      created.push_back(id);
+      if (h.hidden >= 0) {
+        Face& hf = faces_[h.hidden];
+        for (int j = 0; j < 3; ++j)
+          if (hf.v[j] == h.v && hf.v[(j + 1) % 3] == h.u) hf.nb[j] = id;
+      }
+      // Side edges (v, eye) and (eye, u) pair with the neighbouring new faces.
+      const std::pair<int, int> e1{h.v, eye}, e2{eye, h.u};
+      for (auto [e, slot] : {std::pair{e1, 1}, std::pair{e2, 2}}) {
+        auto it = open.find({e.second, e.first});
+        if (it != open.end()) {
+          faces_[id].nb[slot] = it->second.first;
+          faces_[it->second.first].nb[it->second.second] = id;
+          open.erase(it);
+        } else {
+          open[e] = {id, slot};
+        }
+      }
+    }
+    if (!open.empty()) throw std::runtime_error("convex_hull: internal error (horizon is not a closed loop)");
+    assign(orphans, created);
+  }
+
+  std::vector<int> use_;
+  std::vector<Vec3> p_;
+  std::vector<Face> faces_;
+  double eps_ = 0;
+  double size_ = 0;
+};
+
+// Vertices whose incident face normals do not span 3D lie inside a face or on an edge of
+// the hull: they are not extreme points.
+std::vector<int> non_extreme_vertices(const std::vector<Vec3>& pts, const std::vector<std::array<int, 3>>& tris) {
+  std::map<int, std::vector<Vec3>> normals;
+  for (const auto& t : tris) {
+    const Vec3 n = cross(pts[t[1]] - pts[t[0]], pts[t[2]] - pts[t[0]]);
+    const double len = norm(n);
+    const double longest = std::max({norm2(pts[t[1]] - pts[t[0]]), norm2(pts[t[2]] - pts[t[1]]),
+                                     norm2(pts[t[0]] - pts[t[2]])});
+    // Slivers (height < 1e-6 of the base) have no reliable normal: they say nothing.
+    const bool reliable = len > 1e-6 * longest;
+    for (int k = 0; k < 3; ++k) {
+      auto& list = normals[t[k]];
+      if (reliable) list.push_back(n / len);
+    }
+  }
+  constexpr double tol = 1e-9;
+  std::vector<int> out;
+  for (const auto& [v, ns] : normals) {
+    bool extreme = false;
+    if (!ns.empty()) {
+      const Vec3& a = ns[0];
+      Vec3 axis;
+      double best = 0;
+      for (const auto& n : ns) {
+        const Vec3 c = cross(a, n);
+        if (norm2(c) > best) {
+          best = norm2(c);
+          axis = c;
+        }
+      }
+      if (std::sqrt(best) > tol) {
+        axis = normalized(axis);
+        for (const auto& n : ns)
+          if (std::abs(dot(n, axis)) > tol) {
+            extreme = true;
+            break;
+          }
+      }
+    }
+    if (!extreme) out.push_back(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+TriMesh convex_hull(const std::vector<Vec3>& points) {
+  if (points.size() < 4)
+    throw std::invalid_argument("convex_hull: needs at least 4 points, got " + std::to_string(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!is_finite(points[i]))
+      throw std::invalid_argument("convex_hull: point " + std::to_string(i) + " is not finite");
+
+  std::vector<int> use(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) use[i] = static_cast<int>(i);
+  std::vector<std::array<int, 3>> tris;
+  // At most a few rounds: each drops vertices that turned out not to be extreme.
+  for (int round = 0; round < 8; ++round) {
+    Quickhull qh(points, use);
+    qh.run();
+    tris = qh.triangles();
+    const std::vector<int> drop = non_extreme_vertices(points, tris);
+    if (drop.empty()) break;
+    std::vector<int> next;
+    std::vector<char> dropped(points.size(), 0);
+    for (int v : drop) dropped[v] = 1;
+    std::vector<char> on_hull(points.size(), 0);
+    for (const auto& t : tris)
+      for (int v : t) on_hull[v] = 1;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (on_hull[i] && !dropped[i]) next.push_back(static_cast<int>(i));
+    if (next.size() < 4) throw std::invalid_argument("convex_hull: the points are coplanar (flat cloud)");
+    use = std::move(next);
+  }
+
+  // Compact: vertices in increasing input order.
+  std::vector<int> remap(points.size(), -1);
+  for (const auto& t : tris)
+    for (int v : t) remap[v] = 0;
+  TriMesh m;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (remap[i] == 0) {
+      remap[i] = static_cast<int>(m.vertices.size());
+      m.vertices.push_back(points[i]);
+    }
+  m.triangles.reserve(tris.size());
+  for (const auto& t : tris) m.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+  return m;
+}
+
+}  // namespace crumble
+
+namespace crumble {
+
+double convex_inradius_about_centroid(const TriMesh& convex) {
+  const Vec3 o = polyhedron_mass_properties(convex).centroid;
+  double r = std::numeric_limits<double>::infinity();
+  for (const auto& t : convex.triangles) {
+    const Vec3 n = cross(convex.vertices[t[1]] - convex.vertices[t[0]], convex.vertices[t[2]] - convex.vertices[t[0]]);
+    const double len = norm(n);
+    if (len > 0) r = std::min(r, dot(n / len, convex.vertices[t[0]] - o));
+  }
+  return r;
+}
+
+std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) {
+  if (!(distance >= 0) || !std::isfinite(distance))
+    throw std::invalid_argument("inset_convex_vertices: distance must be finite and >= 0");
+  const double inradius = convex_inradius_about_centroid(convex);
+  if (!(distance < inradius))
+    throw std::invalid_argument("inset_convex_vertices: inset distance " + std::to_string(distance) +
+                                " is not smaller than the distance from the centroid to the nearest face (" +
+                                std::to_string(inradius) + ")");
+  // Per vertex, the displacement d minimising Σ_j (n_j·d + distance)² over its incident
+  // triangles j (normal equations, lightly regularised so that a vertex whose faces are
+  // nearly coplanar moves along their common normal and not sideways).
+  const std::size_t nv = convex.vertices.size();
+  std::vector<Mat3> normal_matrix(nv, Mat3::zero());
+  std::vector<Vec3> rhs(nv);
+  for (const auto& t : convex.triangles) {
+    const Vec3 n = cross(convex.vertices[t[1]] - convex.vertices[t[0]], convex.vertices[t[2]] - convex.vertices[t[0]]);
+    const double len = norm(n);
+    if (!(len > 0)) continue;
+    const Vec3 u = n / len;
+    for (int k = 0; k < 3; ++k) {
+      normal_matrix[t[k]] += Mat3::outer(u, u);
+      rhs[t[k]] -= u * distance;
+    }
+  }
+  std::vector<Vec3> out(convex.vertices);
+  for (std::size_t v = 0; v < nv; ++v) {
+    Mat3 a = normal_matrix[v] + Mat3::identity() * (1e-12 * normal_matrix[v].trace());
+    // Solve the 3x3 system by the adjugate (a is symmetric positive definite).
+    const Vec3 c0{a(0, 0), a(1, 0), a(2, 0)}, c1{a(0, 1), a(1, 1), a(2, 1)}, c2{a(0, 2), a(1, 2), a(2, 2)};
+    const double det = dot(c0, cross(c1, c2));
+    if (!(std::abs(det) > 0)) continue;  // isolated vertex: no incident face
+    const Vec3& b = rhs[v];
+    out[v] += Vec3{dot(b, cross(c1, c2)), dot(c0, cross(b, c2)), dot(c0, cross(c1, b))} / det;
+  }
+  return out;
+}
+
 }  // namespace crumble

@@ -10,4 +10,17 @@ namespace crumble {
 // points or a (nearly) flat cloud.
 TriMesh convex_hull(const std::vector<Vec3>& points);
 
+// The vertices of the convex polyhedron `convex` (a convex_hull() result) moved so that
+// every face plane lies `distance` further inside: each vertex takes the least-squares
+// displacement over the planes of its incident faces, which is exact where three faces
+// meet and close for the nearly symmetric vertices of round meshes (more faces meeting).
+// The vertex count stays the same — what engines with a collision margin need (the hull
+// of these points, inflated by `distance`, is the original surface). Throws
+// std::invalid_argument when `distance` is negative or not smaller than the distance from
+// the centroid to the nearest face plane (convex_inradius_about_centroid).
+std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance);
+
+// Distance from the centroid of a closed convex mesh to its nearest face plane.
+double convex_inradius_about_centroid(const TriMesh& convex);
+
 }  // namespace crumble

@@ -4,6 +4,9 @@
 
 #include "backends/lsdem/LsdemEngine.h"
 #include "breakage/none/NoBreakage.h"
+#if CRUMBLE_WITH_BULLET
+#include "backends/bullet/BulletEngine.h"
+#endif
 
 namespace crumble {
 
@@ -41,6 +44,10 @@ Table<EngineFactory>& engines() {
     Table<EngineFactory> t("engine");
     t.add({"lsdem", "in-house level-set DEM (seeds/004 §2), explicit, 2D and 3D",
            [](const Config& c, const EngineContext& ctx) { return make_lsdem_engine(c, ctx); }, {}, {2, 3}});
+#if CRUMBLE_WITH_BULLET
+    t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (seeds/000)",
+           [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3}});
+#endif
     return t;
   }();
   return t;

@@ -1,0 +1,728 @@
+// Bullet adapter. Units: Bullet sees lengths multiplied by `scale_` (so a grain is about
+// one unit: Bullet's tolerances are absolute lengths tuned for ~1-unit objects, METHODS.md
+// §2), seconds and kilograms. Hence internal velocity = scale·v, force and impulse =
+// scale·(SI), inertia = scale²·(SI); every value leaves through to_si()/from the same
+// factors. With the automatic scale a power of two, these conversions are exact.
+#include "backends/bullet/BulletEngine.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include "backends/bullet/PrincipalAxes.h"
+#include "geometry/ConvexHull.h"
+
+// Mixing the float and double builds of Bullet corrupts memory silently (METHODS.md §2).
+#ifndef BT_USE_DOUBLE_PRECISION
+#error "crumble_bullet must be compiled with BT_USE_DOUBLE_PRECISION (link PkgConfig::BULLET64)"
+#endif
+static_assert(sizeof(btScalar) == sizeof(double), "btScalar must be double (BT_USE_DOUBLE_PRECISION)");
+
+namespace crumble {
+
+using bullet_detail::principal_axes;
+
+namespace {
+
+// Collision groups: grains collide with everything, walls and the platen only with grains
+// (the platen overlaps the side walls, and two fixed bodies must not make manifolds).
+constexpr int kGrainGroup = 1 << 6;
+constexpr int kWallGroup = 1 << 7;
+constexpr int kPlatenGroup = 1 << 8;
+constexpr int kCrumbleTag = 0x0c4b1e;  // userIndex2 of every body this adapter creates
+
+// What the combine callbacks and the force read-out need to know about a body.
+struct BodyTag {
+  GrainId id = -1;  // grain id, -1 for walls
+  int wall = -1;    // WallId for walls and the platen
+  double friction = 0;          // grain: material friction μ (walls: unused)
+  double wall_friction = 0;     // grain: friction against walls
+  double rolling_friction = 0;  // grain: rolling-friction coefficient (Bullet convention)
+};
+
+const BodyTag* tag_of(const btCollisionObject* o) {
+  if (!o || o->getUserIndex2() != kCrumbleTag) return nullptr;
+  return static_cast<const BodyTag*>(o->getUserPointer());
+}
+
+// Bullet multiplies the two bodies' friction values; each grain carries √μ so that a pair
+// of the same material gets μ (and a mixed pair √(μa·μb)). Grain–wall pairs take the
+// grain material's wall friction (seeds/000: 0). Bodies not made by crumble keep Bullet's
+// rule.
+btScalar combined_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
+  const BodyTag* t0 = tag_of(b0);
+  const BodyTag* t1 = tag_of(b1);
+  if (t0 && t1) {
+    if (t0->wall >= 0 && t1->wall < 0) return t1->wall_friction;
+    if (t1->wall >= 0 && t0->wall < 0) return t0->wall_friction;
+  }
+  return std::clamp(b0->getFriction() * b1->getFriction(), btScalar(-10), btScalar(10));
+}
+
+btScalar combined_rolling_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
+  const BodyTag* t0 = tag_of(b0);
+  const BodyTag* t1 = tag_of(b1);
+  if (t0 && t1) {
+    if (t0->wall >= 0 && t1->wall < 0) return t1->rolling_friction;
+    if (t1->wall >= 0 && t0->wall < 0) return t0->rolling_friction;
+    return std::sqrt(t0->rolling_friction * t1->rolling_friction);
+  }
+  // Bullet's own rule.
+  return std::clamp(b0->getRollingFriction() * b1->getFriction() + b1->getRollingFriction() * b0->getFriction(),
+                    btScalar(-10), btScalar(10));
+}
+
+void install_combine_callbacks() {
+  // Process-wide hooks of Bullet; the functions fall back to Bullet's rules for foreign bodies.
+  gCalculateCombinedFrictionCallback = &combined_friction;
+  gCalculateCombinedRollingFrictionCallback = &combined_rolling_friction;
+}
+
+btVector3 bt(const Vec3& v) { return {v.x, v.y, v.z}; }
+Vec3 vec(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+btQuaternion bt(const Quat& q) { return {q.x, q.y, q.z, q.w}; }
+Quat quat(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+
+// Bullet data shared by every grain of one Shape.
+struct ShapeEntry {
+  Shape::Ptr shape;
+  std::unique_ptr<btCollisionShape> collision;
+  Quat principal;         // principal frame → shape frame
+  Vec3 centroid;          // shape frame (≈ 0 by Shape's invariant)
+  Vec3 moments;           // principal moments per unit density (SI, m⁵)
+};
+
+// Bullet's PGS solver with Zhu & Zhao's stopping rule (seeds/000 §2.2): stop once the
+// relative change of the contact impulse vector between two iterations,
+// ε = |f^k − f^(k−1)| / |f^k|, is at most `tolerance` (they kept ε ≲ 2e-4). Bullet's own
+// absolute least-squares residual threshold still applies when set. Records the largest
+// iteration count and ε of any island in a step (Bullet's analytics keep only the last,
+// often empty, solver call).
+class ToleranceSolver : public btSequentialImpulseConstraintSolver {
+ public:
+  double tolerance = 0;
+  int max_iterations = -1;
+  double max_change = 0;
+
+  btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
+                                             int numManifolds, btTypedConstraint** constraints, int numConstraints,
+                                             const btContactSolverInfo& info, btIDebugDraw* debug) override {
+    solveGroupCacheFriendlySplitImpulseIterations(bodies, numBodies, manifolds, numManifolds, constraints,
+                                                  numConstraints, info, debug);  // no-op: split impulse is off
+    const int max_it = std::max(m_maxOverrideNumSolverIterations, info.m_numIterations);
+    const bool relative = tolerance > 0 && numManifolds > 0;
+    if (relative) snapshot(previous_);
+    int used = 0;
+    double change = 0;
+    for (int it = 0; it < max_it; ++it) {
+      m_leastSquaresResidual = solveSingleIteration(it, bodies, numBodies, manifolds, numManifolds, constraints,
+                                                    numConstraints, info, debug);
+      used = it + 1;
+      bool done = m_leastSquaresResidual <= info.m_leastSquaresResidualThreshold;
+      if (relative) {
+        change = relative_change();
+        done = done || change <= tolerance;
+      }
+      if (done) break;
+    }
+    m_analyticsData.m_numSolverCalls++;
+    m_analyticsData.m_numIterationsUsed = used;
+    m_analyticsData.m_numBodies = numBodies;
+    m_analyticsData.m_numContactManifolds = numManifolds;
+    m_analyticsData.m_remainingLeastSquaresResidual = m_leastSquaresResidual;
+    if (numManifolds > 0) {
+      max_iterations = std::max(max_iterations, used);
+      max_change = std::max(max_change, change);
+    }
+    return 0;
+  }
+
+ private:
+  // Normal and friction impulses of every contact row, in pool order.
+  void snapshot(std::vector<double>& f) const {
+    f.clear();
+    for (int i = 0; i < m_tmpSolverContactConstraintPool.size(); ++i)
+      f.push_back(m_tmpSolverContactConstraintPool[i].m_appliedImpulse);
+    for (int i = 0; i < m_tmpSolverContactFrictionConstraintPool.size(); ++i)
+      f.push_back(m_tmpSolverContactFrictionConstraintPool[i].m_appliedImpulse);
+  }
+
+  double relative_change() {
+    double diff = 0, total = 0;
+    std::size_t k = 0;
+    auto visit = [&](const btConstraintArray& pool) {
+      for (int i = 0; i < pool.size(); ++i, ++k) {
+        const double f = pool[i].m_appliedImpulse;
+        diff += (f - previous_[k]) * (f - previous_[k]);
+        total += f * f;
+        previous_[k] = f;
+      }
+    };
+    visit(m_tmpSolverContactConstraintPool);
+    visit(m_tmpSolverContactFrictionConstraintPool);
+    return total > 0 ? std::sqrt(diff / total) : 0.0;
+  }
+
+  std::vector<double> previous_;
+};
+
+struct GrainBody {
+  BodyTag tag;
+  std::shared_ptr<ShapeEntry> entry;
+  std::unique_ptr<btRigidBody> body;
+  double mass = 0;  // kg, physical (unscaled)
+};
+
+struct WallBody {
+  BodyTag tag;
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btRigidBody> body;
+};
+
+void require_finite(const Vec3& v, const char* what, GrainId id) {
+  if (!is_finite(v))
+    throw std::invalid_argument("bullet: grain " + std::to_string(id) + " has a non-finite " + what);
+}
+
+}  // namespace
+
+struct BulletEngine::Impl {
+  Options opt;
+  EngineContext ctx;
+
+  std::unique_ptr<btDefaultCollisionConfiguration> config;
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  std::unique_ptr<btDbvtBroadphase> broadphase;
+  std::unique_ptr<ToleranceSolver> solver;
+  std::unique_ptr<btDiscreteDynamicsWorld> world;
+
+  double scale = 0;      // internal units per metre; 0 until fixed
+  double ref_length = 0; // internal length of the reference grain (≈ 1)
+
+  bool have_container = false;
+  Container container;
+  std::vector<std::unique_ptr<WallBody>> walls;  // floor, x-, x+, y-, y+ (static planes)
+  std::unique_ptr<WallBody> platen;
+  double platen_half_thickness = 0;  // internal
+  PlatenCommand command;
+  bool platen_dynamic = false;
+  double platen_z = 0;  // SI, bottom face, tracked exactly in velocity mode
+
+  std::map<GrainId, std::unique_ptr<GrainBody>> grains;
+  std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
+  double total_mass = 0;  // kg, physical
+  double last_dt = 0;
+
+  Impl(const Options& o, const EngineContext& c) : opt(o), ctx(c) {
+    std::string why;
+    if (!bullet_double_precision_ok(&why)) throw std::runtime_error("bullet: " + why);
+    if (ctx.dimension != 3) throw std::invalid_argument("bullet: the engine is 3D only");
+    if (ctx.materials.empty()) throw std::invalid_argument("bullet: no materials");
+    if (!is_finite(ctx.gravity)) throw std::invalid_argument("bullet: gravity is not finite");
+    for (std::size_t i = 0; i < ctx.materials.size(); ++i) {
+      const Material& m = ctx.materials[i];
+      if (!(m.density > 0) || !(m.friction >= 0) || !(m.wall_friction >= 0) || !(m.rolling_friction >= 0))
+        throw std::invalid_argument("bullet: material " + std::to_string(i) +
+                                    " needs density > 0 and non-negative friction coefficients");
+    }
+    install_combine_callbacks();
+    // Bullet's default narrow phase: GJK/EPA, one new point per pair and step, gathered in
+    // persistent manifolds (up to 4 points). Perturbed multi-point GJK was measured: 25 %
+    // slower on the packing test and no better for the sliding-friction test.
+    config = std::make_unique<btDefaultCollisionConfiguration>();
+    dispatcher = std::make_unique<btCollisionDispatcher>(config.get());
+    dispatcher->setDispatcherFlags(dispatcher->getDispatcherFlags() |
+                                   btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD);
+    broadphase = std::make_unique<btDbvtBroadphase>();
+    solver = std::make_unique<ToleranceSolver>();
+    solver->tolerance = opt.solver_tolerance;
+    world = std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(), config.get());
+    world->setGravity(btVector3(0, 0, 0));  // per body, see add_grain
+    world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+    btContactSolverInfo& si = world->getSolverInfo();
+    si.m_numIterations = opt.solver_iterations;
+    si.m_erp2 = opt.erp;        // seeds/000 eq. 8: v_d = β Δd / Δt on contacts
+    si.m_erp = opt.erp;         // (no joints; kept equal)
+    si.m_splitImpulse = 0;      // correction inside the contact impulse, as eq. 8
+    si.m_restitution = 0;
+    // Warm starting also makes Bullet write the impulses back to the manifold points, which
+    // the force read-out needs. No SOLVER_RANDMIZE_ORDER: runs are deterministic.
+    si.m_solverMode = SOLVER_USE_WARMSTARTING | SOLVER_USE_2_FRICTION_DIRECTIONS;
+    si.m_leastSquaresResidualThreshold = 0;
+  }
+
+  ~Impl() {
+    // Bodies leave the world before the world goes.
+    for (auto& [id, g] : grains) world->removeRigidBody(g->body.get());
+    grains.clear();
+    remove_container_bodies();
+    world.reset();
+    solver.reset();
+    broadphase.reset();
+    dispatcher.reset();
+    config.reset();
+  }
+
+  // ---------------------------------------------------------------- units
+  double to_int(double si_length) const { return si_length * scale; }
+  double force_si(double internal_impulse) const { return internal_impulse / (scale * last_dt); }
+
+  void fix_scale(double first_diameter) {
+    if (scale > 0) return;
+    if (opt.length_scale > 0) {
+      scale = opt.length_scale;
+    } else if (first_diameter > 0) {
+      // The power of two nearest to 1/d: a grain is ≈ 1 unit and conversions are exact.
+      scale = std::exp2(std::round(std::log2(1.0 / first_diameter)));
+    } else {
+      scale = 1;
+    }
+    ref_length = first_diameter > 0 ? first_diameter * scale : 1.0;
+    if (have_container) build_container();
+  }
+
+  // ---------------------------------------------------------------- container
+  void remove_container_bodies() {
+    for (auto& w : walls) world->removeRigidBody(w->body.get());
+    walls.clear();
+    if (platen) world->removeRigidBody(platen->body.get());
+    platen.reset();
+  }
+
+  std::unique_ptr<WallBody> make_static_plane(int wall, const Vec3& normal, double constant) {
+    auto w = std::make_unique<WallBody>();
+    w->tag.wall = wall;
+    w->shape = std::make_unique<btStaticPlaneShape>(bt(normal), constant);
+    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, w->shape.get());
+    w->body = std::make_unique<btRigidBody>(info);
+    w->body->setUserPointer(&w->tag);
+    w->body->setUserIndex2(kCrumbleTag);
+    w->body->setFriction(0);  // grain–wall friction comes from the combine callback
+    w->body->setRestitution(0);
+    world->addRigidBody(w->body.get(), kWallGroup, kGrainGroup);
+    return w;
+  }
+
+  void build_container() {
+    remove_container_bodies();
+    const double lx = to_int(container.lx), ly = to_int(container.ly);
+    walls.push_back(make_static_plane(kFloor, {0, 0, 1}, 0));
+    walls.push_back(make_static_plane(kWallXMin, {1, 0, 0}, 0));
+    walls.push_back(make_static_plane(kWallXMax, {-1, 0, 0}, -lx));
+    walls.push_back(make_static_plane(kWallYMin, {0, 1, 0}, 0));
+    walls.push_back(make_static_plane(kWallYMax, {0, -1, 0}, -ly));
+    // Platen: a thick box a little wider than the box (it only meets grains), bottom face
+    // at `height`. Its margin lies inside the box, so the face stays where it is.
+    platen = std::make_unique<WallBody>();
+    platen->tag.wall = kPlaten;
+    platen_half_thickness = 0.25 * std::max(lx, ly);
+    auto box = std::make_unique<btBoxShape>(btVector3(0.55 * lx, 0.55 * ly, platen_half_thickness));
+    box->setMargin(std::min(opt.margin_fraction * ref_length, 0.5 * platen_half_thickness));
+    platen->shape = std::move(box);
+    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, platen->shape.get());
+    info.m_startWorldTransform.setIdentity();
+    info.m_startWorldTransform.setOrigin(btVector3(0.5 * lx, 0.5 * ly, to_int(platen_z) + platen_half_thickness));
+    platen->body = std::make_unique<btRigidBody>(info);
+    platen->body->setUserPointer(&platen->tag);
+    platen->body->setUserIndex2(kCrumbleTag);
+    platen->body->setFriction(0);
+    platen->body->setRestitution(0);
+    platen->body->setActivationState(DISABLE_DEACTIVATION);
+    platen_dynamic = false;
+    configure_platen_body();
+  }
+
+  double platen_mass() const {
+    const double m = container.platen_mass > 0 ? container.platen_mass : total_mass;
+    return std::max(m, 1e-30) * opt.mass_scale;
+  }
+
+  // Kinematic body for velocity control; dynamic body moving along z only for force
+  // control. Changing the kind means leaving and re-entering the world.
+  void configure_platen_body() {
+    btRigidBody* b = platen->body.get();
+    if (b->isInWorld()) world->removeRigidBody(b);
+    const bool dynamic = command.mode == PlatenCommand::Mode::Force;
+    const btVector3 v = b->getLinearVelocity();
+    if (dynamic) {
+      b->setCollisionFlags(b->getCollisionFlags() & ~btCollisionObject::CF_KINEMATIC_OBJECT);
+      b->setMassProps(platen_mass(), btVector3(0, 0, 0));
+      b->setLinearFactor(btVector3(0, 0, 1));
+      b->setAngularFactor(btVector3(0, 0, 0));
+      b->setFlags(b->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+      b->setGravity(btVector3(0, 0, 0));
+      b->setLinearVelocity(btVector3(0, 0, v.z()));
+    } else {
+      b->setMassProps(0, btVector3(0, 0, 0));
+      b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+      b->setLinearVelocity(btVector3(0, 0, 0));
+    }
+    b->setAngularVelocity(btVector3(0, 0, 0));
+    b->updateInertiaTensor();
+    b->setActivationState(DISABLE_DEACTIVATION);
+    platen_dynamic = dynamic;
+    world->addRigidBody(b, kPlatenGroup, kGrainGroup);
+    // A kinematic body's velocity is Bullet's (current − previous transform)/dt: start
+    // from rest at the current place.
+    b->setInterpolationWorldTransform(b->getWorldTransform());
+  }
+
+  double current_platen_z() const {
+    if (!platen || !platen_dynamic) return platen_z;
+    return (platen->body->getWorldTransform().getOrigin().z() - platen_half_thickness) / scale;
+  }
+
+  // ---------------------------------------------------------------- grains
+  std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
+    auto it = shape_cache.find(shape.get());
+    if (it != shape_cache.end()) {
+      if (auto e = it->second.lock()) return e;
+    }
+    // Drop stale entries now and then so the cache does not grow with fragments.
+    for (auto i = shape_cache.begin(); i != shape_cache.end();)
+      i = i->second.expired() ? shape_cache.erase(i) : std::next(i);
+
+    auto e = std::make_shared<ShapeEntry>();
+    e->shape = shape;
+    const MassProperties& mp = shape->mass_properties();
+    if (!(mp.volume > 0)) throw std::invalid_argument("bullet: shape " + shape->describe() + " has no volume");
+    e->centroid = mp.centroid;
+    // Bullet keeps a diagonal inertia: use the principal frame when the shape's is not.
+    const Mat3& I = mp.inertia;
+    const double tr = std::abs(I.trace());
+    const double offdiag = std::max({std::abs(I(0, 1)), std::abs(I(0, 2)), std::abs(I(1, 2))});
+    if (offdiag <= 1e-12 * tr) {
+      e->moments = {I(0, 0), I(1, 1), I(2, 2)};
+      e->principal = Quat{};
+    } else {
+      const auto pa = principal_axes(I);
+      e->moments = pa.moments;
+      e->principal = pa.rotation;
+    }
+    if (!(e->moments.x > 0 && e->moments.y > 0 && e->moments.z > 0))
+      throw std::invalid_argument("bullet: shape " + shape->describe() + " has a non-positive principal moment");
+
+    const double d = shape->equivalent_diameter();
+    if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
+      e->collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
+    } else {
+      // Bullet inflates a hull by its margin: inset the hull by the same amount so the
+      // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer
+      // to a face than twice the margin gets a smaller margin.
+      const TriMesh& hull = shape->convex_hull();
+      double margin = opt.margin_fraction * d;
+      margin = std::min(margin, 0.5 * convex_inradius_about_centroid(hull));
+      const std::vector<Vec3> inset = inset_convex_vertices(hull, margin);
+      const Quat to_principal = e->principal.conjugate();
+      std::vector<btScalar> pts;
+      pts.reserve(3 * inset.size());
+      for (const auto& v : inset) {
+        const Vec3 p = to_principal.rotate(v - e->centroid) * scale;
+        pts.insert(pts.end(), {p.x, p.y, p.z});
+      }
+      auto hs = std::make_unique<btConvexHullShape>(pts.data(), static_cast<int>(inset.size()),
+                                                    static_cast<int>(3 * sizeof(btScalar)));
+      hs->setMargin(to_int(margin));
+      hs->recalcLocalAabb();
+      e->collision = std::move(hs);
+    }
+    shape_cache[shape.get()] = e;
+    return e;
+  }
+
+  btTransform body_transform(const ShapeEntry& e, const Vec3& position, const Quat& orientation) const {
+    const Quat q = orientation.normalized();
+    const Vec3 com = position + q.rotate(e.centroid);
+    btTransform t;
+    t.setOrigin(bt(com * scale));
+    t.setRotation(bt((q * e.principal).normalized()));
+    return t;
+  }
+
+  void add_grain(const Grain& g) {
+    if (!g.shape) throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has no shape");
+    if (g.shape->dimension() != 3)
+      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has a 2D shape; the engine is 3D");
+    if (g.material < 0 || g.material >= static_cast<int>(ctx.materials.size()))
+      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has material index " +
+                                  std::to_string(g.material) + " out of range");
+    if (grains.count(g.id)) throw std::invalid_argument("bullet: grain id " + std::to_string(g.id) + " added twice");
+    require_finite(g.position, "position", g.id);
+    require_finite(g.velocity, "velocity", g.id);
+    require_finite(g.angular_velocity, "angular velocity", g.id);
+    const double qn = std::sqrt(g.orientation.w * g.orientation.w + g.orientation.x * g.orientation.x +
+                                g.orientation.y * g.orientation.y + g.orientation.z * g.orientation.z);
+    if (!(qn > 0) || !std::isfinite(qn))
+      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has an invalid orientation");
+
+    fix_scale(g.shape->equivalent_diameter());
+    const Material& mat = ctx.materials[g.material];
+    auto gb = std::make_unique<GrainBody>();
+    gb->entry = shape_entry(g.shape);
+    gb->tag.id = g.id;
+    gb->tag.friction = mat.friction;
+    gb->tag.wall_friction = mat.wall_friction;
+    gb->tag.rolling_friction = mat.rolling_friction;
+    gb->mass = mat.density * g.shape->volume();
+    // Inertia from the shape's exact mass properties (calculateLocalInertia of a hull is a
+    // box estimate); both scaled by mass_scale (seeds/000 §5).
+    const double m = gb->mass * opt.mass_scale;
+    const Vec3 inertia = gb->entry->moments * (mat.density * opt.mass_scale * scale * scale);
+    btRigidBody::btRigidBodyConstructionInfo info(m, nullptr, gb->entry->collision.get(), bt(inertia));
+    info.m_startWorldTransform = body_transform(*gb->entry, g.position, g.orientation);
+    info.m_friction = std::sqrt(mat.friction);
+    info.m_rollingFriction = mat.rolling_friction;
+    info.m_restitution = 0;
+    info.m_linearDamping = 0;
+    info.m_angularDamping = 0;
+    gb->body = std::make_unique<btRigidBody>(info);
+    btRigidBody* b = gb->body.get();
+    b->setUserPointer(&gb->tag);
+    b->setUserIndex2(kCrumbleTag);
+    b->setActivationState(DISABLE_DEACTIVATION);
+    b->setFlags(b->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+    // Mass scaling slows the dynamics; the weight stays m·g.
+    b->setGravity(bt(ctx.gravity * (scale / opt.mass_scale)));
+    const Quat q = g.orientation.normalized();
+    b->setLinearVelocity(bt((g.velocity + cross(g.angular_velocity, q.rotate(gb->entry->centroid))) * scale));
+    b->setAngularVelocity(bt(g.angular_velocity));
+    world->addRigidBody(b, kGrainGroup, kGrainGroup | kWallGroup | kPlatenGroup);
+    total_mass += gb->mass;
+    grains.emplace(g.id, std::move(gb));
+    if (platen && platen_dynamic && container.platen_mass <= 0) platen->body->setMassProps(platen_mass(), btVector3(0, 0, 0));
+  }
+
+  void remove_grain(GrainId id) {
+    auto it = grains.find(id);
+    if (it == grains.end()) throw std::invalid_argument("bullet: remove_grain: unknown grain id " + std::to_string(id));
+    world->removeRigidBody(it->second->body.get());
+    total_mass -= it->second->mass;
+    grains.erase(it);
+    if (grains.empty()) total_mass = 0;
+    if (platen && platen_dynamic && container.platen_mass <= 0) platen->body->setMassProps(platen_mass(), btVector3(0, 0, 0));
+  }
+
+  // ---------------------------------------------------------------- stepping
+  void step(double dt) {
+    if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("bullet: step needs a finite dt > 0");
+    if (scale <= 0) fix_scale(0);
+    if (!have_container) throw std::logic_error("bullet: step() before set_container()");
+    btContactSolverInfo& si = world->getSolverInfo();
+    // Bullet's residual = the largest squared velocity change of a row in the last
+    // iteration (internal units); solver_residual is that change times dt, in length units.
+    const double vres = opt.solver_residual / dt;
+    si.m_leastSquaresResidualThreshold = vres * vres;
+    btRigidBody* p = platen->body.get();
+    if (platen_dynamic) {
+      p->applyCentralForce(btVector3(0, 0, -command.value * scale));
+    } else {
+      // Kinematic: Bullet derives the velocity from the new transform.
+      platen_z += command.value * dt;
+      btTransform t = p->getWorldTransform();
+      t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(platen_z) + platen_half_thickness));
+      p->setWorldTransform(t);
+    }
+    last_dt = dt;
+    solver->max_iterations = 0;
+    solver->max_change = 0;
+    world->stepSimulation(dt, 0);  // exactly one internal step of dt
+    if (platen_dynamic) platen_z = current_platen_z();
+  }
+
+  // Impulse (internal units) on body0 of a manifold: normal plus both friction directions.
+  static btVector3 impulse_on_body0(const btPersistentManifold* m) {
+    btVector3 j(0, 0, 0);
+    for (int k = 0; k < m->getNumContacts(); ++k) {
+      const btManifoldPoint& p = m->getContactPoint(k);
+      j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
+           p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
+    }
+    return j;
+  }
+
+  // Vertical impulse on a wall body, summed over its manifolds.
+  double wall_impulse_z(int wall) const {
+    if (last_dt <= 0) return 0;
+    double jz = 0;
+    const int n = dispatcher->getNumManifolds();
+    for (int i = 0; i < n; ++i) {
+      const btPersistentManifold* m = dispatcher->getInternalManifoldPointer()[i];
+      const BodyTag* t0 = tag_of(m->getBody0());
+      const BodyTag* t1 = tag_of(m->getBody1());
+      if (!t0 || !t1) continue;
+      const btVector3 j0 = impulse_on_body0(m);
+      if (t0->wall == wall) jz += j0.z();
+      if (t1->wall == wall) jz -= j0.z();
+    }
+    return jz;
+  }
+
+  std::vector<Contact> contacts() const {
+    std::vector<Contact> out;
+    if (last_dt <= 0) return out;
+    const int n = dispatcher->getNumManifolds();
+    for (int i = 0; i < n; ++i) {
+      const btPersistentManifold* m = dispatcher->getInternalManifoldPointer()[i];
+      const int np = m->getNumContacts();
+      if (np == 0) continue;
+      const BodyTag* t0 = tag_of(m->getBody0());
+      const BodyTag* t1 = tag_of(m->getBody1());
+      if (!t0 || !t1 || (t0->wall >= 0 && t1->wall >= 0)) continue;
+      btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), mid_sum(0, 0, 0);
+      double jn = 0;
+      for (int k = 0; k < np; ++k) {
+        const btManifoldPoint& p = m->getContactPoint(k);
+        const btVector3 mid = 0.5 * (p.getPositionWorldOnA() + p.getPositionWorldOnB());
+        j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
+             p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
+        const double w = std::max(p.m_appliedImpulse, btScalar(0));
+        point += mid * w;
+        normal += p.m_normalWorldOnB * w;
+        jn += w;
+        mid_sum += mid;
+      }
+      if (!(jn > 0)) continue;  // touching without force: not an active contact
+      point /= jn;
+      normal = normal.length2() > 0 ? normal.normalized() : m->getContactPoint(0).m_normalWorldOnB;
+      // Bullet's normal on B points from B to A, and j is the impulse on A (body0).
+      Contact c;
+      bool flip = false;
+      if (t0->wall >= 0) {  // wall is body0: the grain (body1) is `a`
+        c.a = t1->id;
+        c.wall = t0->wall;
+        flip = true;
+      } else if (t1->wall >= 0) {
+        c.a = t0->id;
+        c.wall = t1->wall;
+      } else {
+        // Grain pair once, `a` the smaller id.
+        flip = t1->id < t0->id;
+        c.a = flip ? t1->id : t0->id;
+        c.b = flip ? t0->id : t1->id;
+      }
+      const double sgn = flip ? -1.0 : 1.0;
+      c.force = vec(j) * (sgn / (scale * last_dt));
+      c.normal = vec(normal) * sgn;
+      c.point = vec(point) / scale;
+      out.push_back(c);
+    }
+    return out;
+  }
+
+  void read_state(std::span<Grain> gs) const {
+    for (auto& g : gs) {
+      auto it = grains.find(g.id);
+      if (it == grains.end()) continue;
+      const GrainBody& gb = *it->second;
+      const btRigidBody* b = gb.body.get();
+      const btTransform& t = b->getWorldTransform();
+      const Quat q = (quat(t.getRotation()) * gb.entry->principal.conjugate()).normalized();
+      const Vec3 com = vec(t.getOrigin()) / scale;
+      const Vec3 arm = q.rotate(gb.entry->centroid);
+      const Vec3 w = vec(b->getAngularVelocity());
+      g.orientation = q;
+      g.position = com - arm;
+      g.angular_velocity = w;
+      g.velocity = vec(b->getLinearVelocity()) / scale - cross(w, arm);
+    }
+  }
+
+  void set_container(const Container& c) {
+    if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
+        !std::isfinite(c.height))
+      throw std::invalid_argument("bullet: container needs finite lx, ly, height > 0");
+    if (!(c.platen_mass >= 0)) throw std::invalid_argument("bullet: container platen_mass must be >= 0");
+    container = c;
+    have_container = true;
+    platen_z = c.height;
+    if (scale > 0) build_container();
+  }
+
+  void set_platen(const PlatenCommand& cmd) {
+    if (!std::isfinite(cmd.value)) throw std::invalid_argument("bullet: platen command value is not finite");
+    const bool mode_change = cmd.mode != command.mode;
+    command = cmd;
+    if (platen && mode_change) configure_platen_body();
+  }
+};
+
+// ------------------------------------------------------------------ BulletEngine
+
+BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
+  cfg.string("type", "bullet");
+  Options o;
+  o.exact_spheres = cfg.choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"}) == "sphere";
+  o.length_scale = cfg.number("length_scale", 0, 0);
+  o.margin_fraction = cfg.positive("margin_fraction", 0.01);
+  if (o.margin_fraction > 0.1) cfg.fail("margin_fraction", "expected a number in (0, 0.1], got " + std::to_string(o.margin_fraction));
+  o.solver_iterations = static_cast<int>(cfg.integer("solver_iterations", 100, 1, 1000000));
+  o.solver_tolerance = cfg.number("solver_tolerance", 2e-4, 0, 1);
+  o.solver_residual = cfg.number("solver_residual", 0, 0, 1);
+  o.erp = cfg.number("erp", 0.003, 0, 1);
+  o.mass_scale = cfg.positive("mass_scale", 1);
+  return o;
+}
+
+BulletEngine::BulletEngine(const Options& opts, const EngineContext& ctx)
+    : impl_(std::make_unique<Impl>(opts, ctx)) {}
+BulletEngine::~BulletEngine() = default;
+
+void BulletEngine::set_container(const Container& c) { impl_->set_container(c); }
+void BulletEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
+void BulletEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
+std::size_t BulletEngine::grain_count() const { return impl_->grains.size(); }
+void BulletEngine::step(double dt) { impl_->step(dt); }
+void BulletEngine::read_state(std::span<Grain> grains) const { impl_->read_state(grains); }
+std::vector<Contact> BulletEngine::contacts() const { return impl_->contacts(); }
+void BulletEngine::set_platen(const PlatenCommand& cmd) { impl_->set_platen(cmd); }
+double BulletEngine::platen_position() const { return impl_->current_platen_z(); }
+
+double BulletEngine::platen_force() const {
+  if (impl_->last_dt <= 0) return 0;
+  return impl_->force_si(impl_->wall_impulse_z(kPlaten));  // up on the platen = compression
+}
+
+double BulletEngine::floor_force() const {
+  if (impl_->last_dt <= 0) return 0;
+  return -impl_->force_si(impl_->wall_impulse_z(kFloor));  // grains push the floor down
+}
+
+double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
+
+double BulletEngine::length_scale() const { return impl_->scale; }
+
+int BulletEngine::last_solver_iterations() const { return impl_->solver->max_iterations; }
+
+std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx) {
+  const auto opts = BulletEngine::read_options(cfg);
+  if (ctx.dimension != 3) cfg.fail("", "the bullet engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
+  return std::make_unique<BulletEngine>(opts, ctx);
+}
+
+bool bullet_double_precision_ok(std::string* why) {
+  if (sizeof(btScalar) != sizeof(double)) {
+    if (why) *why = "btScalar is not double in crumble_bullet";
+    return false;
+  }
+  // Ask the linked library: a sphere's AABB is computed inside libBulletCollision. With the
+  // single-precision library linked against double headers the layout differs and the
+  // value comes back wrong.
+  const double r = 0.123456789012345678;
+  btSphereShape s(r);
+  btVector3 lo, hi;
+  btTransform id;
+  id.setIdentity();
+  s.getAabb(id, lo, hi);
+  if (hi.x() != r || lo.z() != -r) {
+    if (why) *why = "the linked Bullet library is not the double-precision build (libBullet*-float64)";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace crumble
