@@ -1,0 +1,125 @@
+// The command line end to end: exit statuses and error messages for every bad-input class.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int status;
+  std::string output;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(CRUMBLE_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int st = p ? pclose(p) : -1;
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+std::string scenario_file(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_cli_test";
+  fs::create_directories(dir);
+  const fs::path f = dir / name;
+  std::ofstream(f) << text;
+  return f.string();
+}
+
+// A valid rigid scenario on the in-house engine (no external dependency).
+const std::string kGood = R"({
+  "name": "cli_test", "engine": {"type": "lsdem"}, "breakage": {"type": "none"},
+  "container": {"lx": 0.01, "ly": 0.01, "height": 0.004},
+  "packing": {"type": "grains", "grains": [
+     {"shape": {"type": "sphere", "radius": 0.001}, "position": [0.005, 0.005, 0.0011]}]},
+  "loading": {"mode": "strain_rate", "strain_rate": 1.0, "stop_strain": 0.001},
+  "time_step": 1e-6, "simulation": {"max_steps": 50}
+})";
+
+void expect_input_error(const std::string& args, const std::string& needle) {
+  const Result r = run(args);
+  EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+  EXPECT_NE(r.output.find(needle), std::string::npos) << "expected '" << needle << "' in:\n" << r.output;
+}
+
+}  // namespace
+
+TEST(Cli, VersionHelpList) {
+  EXPECT_EQ(run("--version").status, 0);
+  const Result h = run("--help");
+  EXPECT_EQ(h.status, 0);
+  EXPECT_NE(h.output.find("validate"), std::string::npos);
+  const Result l = run("list");
+  EXPECT_EQ(l.status, 0);
+  EXPECT_NE(l.output.find("lsdem"), std::string::npos);
+  EXPECT_NE(l.output.find("none"), std::string::npos);
+}
+
+TEST(Cli, ValidScenarioValidates) {
+  const Result r = run("validate " + scenario_file("good.json", kGood));
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
+TEST(Cli, MalformedJson) {
+  expect_input_error("validate " + scenario_file("bad.json", "{\"engine\": {\"type\": \"lsdem\",}"), "malformed JSON");
+}
+
+TEST(Cli, MissingFile) { expect_input_error("validate /nonexistent/x.json", "cannot open"); }
+
+TEST(Cli, UnknownKeyNamesPath) {
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set loading.strain_rte=2", "/loading/strain_rte");
+}
+
+TEST(Cli, WrongType) {
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set container.lx=wide", "/container/lx: expected a number");
+}
+
+TEST(Cli, UnknownNamesListKnownOnes) {
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set engine.type=havok", "known:");
+  expect_input_error("validate " + f + " --set breakage.type=magic", "/breakage/type");
+  expect_input_error("validate " + f + " --set fragments.type=origami", "/fragments/type");
+}
+
+TEST(Cli, NegativeZeroAndNaNSizes) {
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set packing.grains.0.shape.radius=-0.001", "/packing/grains/0/shape/radius");
+  expect_input_error("validate " + f + " --set packing.grains.0.shape.radius=0", "/packing/grains/0/shape/radius");
+  expect_input_error("validate " + f + " --set packing.grains.0.shape.radius=NaN", "/packing/grains/0/shape/radius");
+  expect_input_error("validate " + f + " --set container.height=0", "/container/height");
+}
+
+TEST(Cli, BadCommandLine) {
+  EXPECT_EQ(run("run").status, 2);
+  EXPECT_EQ(run("frobnicate").status, 2);
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("run " + f + " --out /tmp/x --set nodot", "path=value");
+}
+
+TEST(Cli, RunWritesEveryOutput) {
+  const std::string f = scenario_file("good.json", kGood);
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "run_out";
+  fs::remove_all(out);
+  const Result r = run("run " + f + " --out " + out.string() + " --quiet");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* name : {"summary.json", "series.csv", "events.csv", "psd.csv", "effective_scenario.json",
+                           "packing.json", "breakage_per_mpa.csv", "grains.pvd"})
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  std::ifstream in(out / "summary.json");
+  std::string s((std::istreambuf_iterator<char>(in)), {});
+  for (const char* key : {"scenario", "engine", "breakage", "fragments", "seed", "threads", "wall_seconds", "steps",
+                          "grains_initial", "grains_final", "breakage_events", "mass_initial_kg", "mass_final_kg",
+                          "mass_removed_kg", "void_ratio_initial", "void_ratio_final", "max_platen_stress_Pa"})
+    EXPECT_NE(s.find(std::string("\"") + key + "\""), std::string::npos) << key;
+}
