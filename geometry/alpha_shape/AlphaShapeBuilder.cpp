@@ -53,7 +53,7 @@ TriMesh cube_hull(const std::vector<Vec3>& pts, double spacing) {
   const double h = 0.5 * spacing;
   for (const auto& p : pts)
     for (int k = 0; k < 8; ++k) corners.push_back(p + Vec3{(k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h});
-  return cgal_convex_hull(corners);
+  return cgal_convex_hull(corners, spacing);
 }
 
 }  // namespace
@@ -96,8 +96,9 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
   for (std::size_t i = 0; i < pc.points.size(); ++i) {
     const int c = pc.cluster[i];
     material[c].push_back(pc.points[i]);
-    // Without surface flags every point of the cluster is handed to the alpha shape
-    // (interior points end up inside it; slower, same surface).
+    // Boundary vertices (seeds/000 §3.2): surface points + fracture points. They feed the
+    // convex hulls and the alpha shape with alpha_boundary_only; without surface flags
+    // every point of the cluster counts as a boundary vertex (same hull, slower).
     if (pc.on_surface.empty() || pc.on_surface[i]) boundary[c].push_back(pc.points[i]);
   }
   if (!pc.fracture_points.empty())
