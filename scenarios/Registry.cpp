@@ -7,6 +7,9 @@
 #if CRUMBLE_WITH_BULLET
 #include "backends/bullet/BulletEngine.h"
 #endif
+#if CRUMBLE_WITH_CGAL
+#include "geometry/alpha_shape/AlphaShapeBuilder.h"
+#endif
 
 namespace crumble {
 
@@ -66,6 +69,10 @@ Table<ModelFactory>& breakage_models() {
 Table<BuilderFactory>& fragment_builders() {
   static Table<BuilderFactory> t = [] {
     Table<BuilderFactory> t("fragment builder");
+#if CRUMBLE_WITH_CGAL
+    t.add({"alpha_shape", "alpha-shape polyhedra of point clusters (CGAL, seeds/000 §3.2); plane cuts of the parent mesh",
+           [](const Config& c, const EngineContext& x) { return make_alpha_shape_builder(c, x); }, {}, {3}});
+#endif
     return t;
   }();
   return t;

@@ -1,0 +1,284 @@
+#include "geometry/alpha_shape/AlphaShapeBuilder.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+#include "geometry/MeshClip.h"
+
+namespace crumble {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double diameter_of_volume(double v) { return std::cbrt(6.0 * v / kPi); }
+
+void validate(const PointClusters& pc) {
+  const std::size_t n = pc.points.size();
+  if (!(pc.spacing > 0) || !std::isfinite(pc.spacing))
+    throw std::invalid_argument("PointClusters: spacing must be > 0 (got " + std::to_string(pc.spacing) + ")");
+  if (pc.clusters < 1) throw std::invalid_argument("PointClusters: clusters must be >= 1");
+  if (pc.cluster.size() != n)
+    throw std::invalid_argument("PointClusters: cluster has " + std::to_string(pc.cluster.size()) +
+                                " entries for " + std::to_string(n) + " points");
+  if (!pc.on_surface.empty() && pc.on_surface.size() != n)
+    throw std::invalid_argument("PointClusters: on_surface has " + std::to_string(pc.on_surface.size()) +
+                                " entries for " + std::to_string(n) + " points");
+  if (!pc.fracture_points.empty() && pc.fracture_points.size() != static_cast<std::size_t>(pc.clusters))
+    throw std::invalid_argument("PointClusters: fracture_points has " + std::to_string(pc.fracture_points.size()) +
+                                " lists for " + std::to_string(pc.clusters) + " clusters");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (pc.cluster[i] < 0 || pc.cluster[i] >= pc.clusters)
+      throw std::invalid_argument("PointClusters: point " + std::to_string(i) + " has cluster " +
+                                  std::to_string(pc.cluster[i]) + " outside [0, " + std::to_string(pc.clusters) + ")");
+    if (!is_finite(pc.points[i])) throw std::invalid_argument("PointClusters: point " + std::to_string(i) + " is not finite");
+  }
+  for (const auto& fp : pc.fracture_points)
+    for (const auto& p : fp)
+      if (!is_finite(p)) throw std::invalid_argument("PointClusters: a fracture point is not finite");
+}
+
+// Last resort for clusters whose points are (nearly) flat or too few for a hull: the
+// hull of the cubes of side `spacing` around each material point (the volume each
+// lattice point stands for), so a cluster never loses its child.
+TriMesh cube_hull(const std::vector<Vec3>& pts, double spacing) {
+  std::vector<Vec3> corners;
+  corners.reserve(8 * pts.size());
+  const double h = 0.5 * spacing;
+  for (const auto& p : pts)
+    for (int k = 0; k < 8; ++k) corners.push_back(p + Vec3{(k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h});
+  return cgal_convex_hull(corners, spacing);
+}
+
+}  // namespace
+
+AlphaShapeBuilder::AlphaShapeBuilder(AlphaShapeBuilderOptions opt) : opt_(std::move(opt)) {
+  if (!(opt_.hull_diameter >= 0) || !(opt_.hull_convexity >= 0) || !(opt_.min_piece_volume_fraction >= 0) ||
+      !(opt_.min_piece_volume_fraction < 0.5))
+    throw std::invalid_argument("AlphaShapeBuilder: need hull_diameter >= 0, hull_convexity >= 0, "
+                                "0 <= min_piece_volume_fraction < 0.5");
+}
+
+FragmentResult AlphaShapeBuilder::build(const Shape& parent, const Fracture& fracture) const {
+  return build(parent, fracture, nullptr);
+}
+
+FragmentResult AlphaShapeBuilder::build(const Shape& parent, const Fracture& fracture,
+                                        std::vector<ChildReport>* reports) const {
+  if (parent.dimension() != 3)
+    throw std::invalid_argument("fragment builder 'alpha_shape' is 3D only (parent is " + parent.describe() + ")");
+  if (reports) reports->clear();
+  return std::visit(
+      [&](const auto& f) {
+        using T = std::decay_t<decltype(f)>;
+        if constexpr (std::is_same_v<T, PointClusters>)
+          return from_clusters(parent, f, reports);
+        else
+          return from_planes(parent, f, reports);
+      },
+      fracture);
+}
+
+// seeds/000 §3.2: boundary vertices = original surface points + fracture-surface points;
+// alpha shape with Euler characteristic 2 and no self-intersection; convex hull when
+// d_e < 0.7 mm or convexity >= 0.85; uniform rescaling to the parent's volume.
+FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const PointClusters& pc,
+                                                std::vector<ChildReport>* rep) const {
+  validate(pc);
+  FragmentResult out;
+  std::vector<std::vector<Vec3>> boundary(pc.clusters), material(pc.clusters);
+  for (std::size_t i = 0; i < pc.points.size(); ++i) {
+    const int c = pc.cluster[i];
+    material[c].push_back(pc.points[i]);
+    // Boundary vertices (seeds/000 §3.2): surface points + fracture points. They feed the
+    // convex hulls and the alpha shape with alpha_boundary_only; without surface flags
+    // every point of the cluster counts as a boundary vertex (same hull, slower).
+    if (pc.on_surface.empty() || pc.on_surface[i]) boundary[c].push_back(pc.points[i]);
+  }
+  if (!pc.fracture_points.empty())
+    for (int c = 0; c < pc.clusters; ++c)
+      boundary[c].insert(boundary[c].end(), pc.fracture_points[c].begin(), pc.fracture_points[c].end());
+
+  const double n_total = static_cast<double>(pc.points.size());
+  AlphaShapeOptions aopt = opt_.alpha;
+  aopt.spacing = pc.spacing;
+  std::vector<TriMesh> meshes;
+  std::vector<ChildReport> reports;
+  int n_alpha = 0, n_hull = 0;
+  for (int c = 0; c < pc.clusters; ++c) {
+    if (material[c].empty()) continue;  // no material, no child (nothing is lost)
+    const auto t0 = std::chrono::steady_clock::now();
+    ChildReport r;
+    r.boundary_points = static_cast<int>(boundary[c].size());
+    r.cluster_points = static_cast<int>(material[c].size());
+    // The size rule uses the child's final size, estimated from its share of the
+    // parent's material points (the alpha shape itself is shrunk by the lattice).
+    const double d_est = diameter_of_volume(parent.volume() * material[c].size() / n_total);
+    TriMesh mesh;
+    bool have = false;
+    if (d_est < opt_.hull_diameter) {
+      r.method = "convex_hull";
+      r.note = "d_e " + std::to_string(d_est) + " m < convex_hull_diameter";
+    } else if (boundary[c].size() >= 4) {
+      std::vector<Vec3> input = boundary[c];
+      if (!opt_.alpha_boundary_only) {
+        input = material[c];
+        if (!pc.fracture_points.empty())
+          input.insert(input.end(), pc.fracture_points[c].begin(), pc.fracture_points[c].end());
+      }
+      const AlphaShapeResult a = alpha_shape_polyhedron(input, aopt);
+      r.alpha = a.alpha;
+      r.alpha_steps = a.steps;
+      if (a.ok) {
+        try {
+          const double v_hull = polyhedron_mass_properties(cgal_convex_hull(boundary[c], pc.spacing)).volume;
+          r.convexity = polyhedron_mass_properties(a.mesh).volume / v_hull;
+        } catch (const std::invalid_argument&) {
+          r.convexity = 1;  // cannot happen for a closed alpha shape; treat as convex
+        }
+        if (r.convexity >= opt_.hull_convexity) {
+          r.method = "convex_hull";
+          r.note = "convexity " + std::to_string(r.convexity) + " >= convex_hull_convexity";
+        } else {
+          r.method = "alpha_shape";
+          mesh = a.mesh;
+          have = true;
+        }
+      } else {
+        r.method = "hull_fallback";
+        r.note = "no valid alpha: " + a.failure;
+      }
+    } else {
+      r.method = "hull_fallback";
+      r.note = "fewer than 4 boundary points";
+    }
+    if (!have) {
+      try {
+        mesh = cgal_convex_hull(boundary[c].size() >= 4 ? boundary[c] : material[c], pc.spacing);
+      } catch (const std::invalid_argument& e) {
+        // Flat or tiny cluster: hull of the points' lattice cells.
+        std::vector<Vec3> pts = material[c];
+        if (!pc.fracture_points.empty()) pts.insert(pts.end(), pc.fracture_points[c].begin(), pc.fracture_points[c].end());
+        mesh = cube_hull(pts, pc.spacing);
+        r.method = "hull_fallback";
+        r.note += std::string(r.note.empty() ? "" : "; ") + e.what() + " -> hull of the points' lattice cells";
+      }
+    }
+    if (r.method == "hull_fallback") ++out.fallbacks;
+    (r.method == "alpha_shape" ? n_alpha : n_hull)++;
+    r.seconds = seconds_since(t0);
+    meshes.push_back(std::move(mesh));
+    reports.push_back(std::move(r));
+  }
+  out.method = n_hull == 0 ? "alpha_shape" : (n_alpha == 0 ? "convex_hull" : "alpha_shape+convex_hull");
+  out.children = finish(std::move(meshes), parent.volume(), &reports);
+  if (rep) *rep = std::move(reports);
+  return out;
+}
+
+FragmentResult AlphaShapeBuilder::from_planes(const Shape& parent, const CuttingSurfaces& cs,
+                                              std::vector<ChildReport>* rep) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<ClipPlane> planes;
+  for (const auto& p : cs.planes) planes.push_back({p.normal, p.offset});
+  std::vector<TriMesh> pieces = split_by_planes(parent.mesh(), planes);
+  FragmentResult out;
+  out.method = "plane_cut";
+  // The parent's mesh may differ from its analytic volume (a sphere's icosphere): the
+  // threshold and the rescaling below both refer to parent.volume().
+  std::vector<TriMesh> kept;
+  for (auto& m : pieces) {
+    if (polyhedron_mass_properties(m).volume < opt_.min_piece_volume_fraction * parent.volume()) {
+      ++out.fallbacks;
+      continue;
+    }
+    kept.push_back(std::move(m));
+  }
+  std::vector<ChildReport> reports(kept.size());
+  const double dt = seconds_since(t0);
+  for (auto& r : reports) {
+    r.method = "plane_cut";
+    r.seconds = dt / static_cast<double>(reports.size());
+  }
+  out.children = finish(std::move(kept), parent.volume(), &reports);
+  if (rep) *rep = std::move(reports);
+  return out;
+}
+
+std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, double target,
+                                                std::vector<ChildReport>* rep) const {
+  if (meshes.empty()) throw std::runtime_error("fragment builder 'alpha_shape': no child could be built");
+  double sum = 0;
+  std::vector<Vec3> centroid(meshes.size());
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const MassProperties mp = polyhedron_mass_properties(meshes[i]);
+    sum += mp.volume;
+    centroid[i] = mp.centroid;
+    if (rep) (*rep)[i].raw_volume = mp.volume;
+  }
+  if (!(sum > 0)) throw std::runtime_error("fragment builder 'alpha_shape': children have no volume");
+  // Uniform scaling of all children (seeds/000 §3.2: "shrunken slightly until the total
+  // volume of child particles equals the volume of the parent"; alpha shapes through
+  // lattice points grow instead).
+  const double f = std::cbrt(target / sum);
+  if (rep)
+    for (auto& r : *rep) r.scale = f;
+  std::vector<Fragment> out;
+  out.reserve(meshes.size());
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const Vec3 centre = opt_.scale_about_parent ? Vec3{} : centroid[i];
+    for (auto& v : meshes[i].vertices) v = centre + (v - centre) * f;
+    Fragment fr;
+    fr.shape = Shape::polyhedron(std::move(meshes[i]));
+    fr.offset = -fr.shape->recentring();  // centroid in the parent frame before re-centring
+    out.push_back(std::move(fr));
+  }
+  // Rounding of the re-centred meshes leaves ~1e-15; correct it about each centroid.
+  for (int pass = 0; pass < 3; ++pass) {
+    double s = 0;
+    for (const auto& fr : out) s += fr.shape->volume();
+    if (std::abs(s - target) <= 1e-13 * target) break;
+    const double g = std::cbrt(target / s);
+    for (auto& fr : out) fr.shape = fr.shape->scaled(g);
+  }
+  return out;
+}
+
+// Config keys of "fragments" (type "alpha_shape"), with defaults:
+//   convex_hull_diameter       0.7e-3 m   hull below this equivalent diameter (seeds/000 §3.2)
+//   convex_hull_convexity      0.85       hull when V/V_hull >= this (> 1 disables)
+//   alpha_start_spacings       2.0        walk starts at sqrt(alpha) = this × spacing
+//   alpha_max_spacings         20.0       give up (hull fallback) beyond this sqrt(alpha)/spacing
+//   max_alpha_steps            400        candidate alphas examined before the fallback
+//   alpha_min_growth           0.0        min relative alpha increase between candidates
+//   alpha_input                "all_points" (cluster points + fracture points) | "boundary_points"
+//   scale_about                "parent_centroid" | "child_centroid"
+//   min_piece_volume_fraction  1e-6       plane cuts: drop slivers below this × V_parent
+std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, const EngineContext& ctx) {
+  cfg.string("type", "alpha_shape");
+  AlphaShapeBuilderOptions o;
+  o.hull_diameter = cfg.number("convex_hull_diameter", 0.7e-3, 0.0);
+  o.hull_convexity = cfg.number("convex_hull_convexity", 0.85, 0.0, 2.0);
+  o.alpha.start_spacings = cfg.number("alpha_start_spacings", 2.0, 0.5, 100.0);
+  o.alpha.max_spacings = cfg.number("alpha_max_spacings", 20.0, 0.5, 1e6);
+  if (o.alpha.max_spacings < o.alpha.start_spacings)
+    cfg.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + std::to_string(o.alpha.start_spacings) + ")");
+  o.alpha.max_steps = static_cast<int>(cfg.integer("max_alpha_steps", 400, 1, 1000000));
+  o.alpha.min_growth = cfg.number("alpha_min_growth", 0.0, 0.0, 10.0);
+  o.alpha_boundary_only =
+      cfg.choice("alpha_input", "all_points", {"all_points", "boundary_points"}) == "boundary_points";
+  o.scale_about_parent =
+      cfg.choice("scale_about", "parent_centroid", {"parent_centroid", "child_centroid"}) == "parent_centroid";
+  o.min_piece_volume_fraction = cfg.number("min_piece_volume_fraction", 1e-6, 0.0, 0.1);
+  if (ctx.dimension != 3) cfg.fail("type", "fragment builder 'alpha_shape' is 3D only (scenario dimension " +
+                                               std::to_string(ctx.dimension) + ")");
+  return std::make_unique<AlphaShapeBuilder>(o);
+}
+
+}  // namespace crumble
