@@ -96,13 +96,15 @@ TEST_P(BulletRestingSphere, FloorCarriesTheWeight) {
 
 INSTANTIATE_TEST_SUITE_P(Representations, BulletRestingSphere, ::testing::Values("polyhedron", "sphere"));
 
-// (b) Two cubes stacked: the floor carries 2mg, the cube–cube contact mg.
+// (b) Two cubes stacked: the floor carries 2mg, the cube–cube contact mg. The bottom
+// cube has the larger id and enters first, so Bullet's manifold lists the pair in the
+// order opposite to crumble's (a = the smaller id).
 TEST(BulletEngine, TwoGrainStackCarriesWeightsDownwards) {
   auto e = make_engine();
   const auto s = Shape::box({1e-3, 1e-3, 1e-3});
   e->set_container({10e-3, 10e-3, 10e-3, 0});
-  e->add_grain(grain(0, s, {5e-3, 5e-3, 1.01e-3}));
-  e->add_grain(grain(1, s, {5.2e-3, 4.9e-3, 3.03e-3}, Quat::from_axis_angle({0, 0, 1}, 0.4)));
+  e->add_grain(grain(5, s, {5e-3, 5e-3, 1.01e-3}));
+  e->add_grain(grain(2, s, {5.2e-3, 4.9e-3, 3.03e-3}, Quat::from_axis_angle({0, 0, 1}, 0.4)));
   run(*e, 2000);
   const double mg = mass_of(s) * kG;
   EXPECT_NEAR(e->floor_force(), 2 * mg, 0.01 * 2 * mg);
@@ -111,24 +113,24 @@ TEST(BulletEngine, TwoGrainStackCarriesWeightsDownwards) {
   int seen = 0;
   for (const auto& c : cs) {
     if (c.is_wall()) {
-      EXPECT_EQ(c.a, 0);
+      EXPECT_EQ(c.a, 5);
       EXPECT_EQ(c.wall, kFloor);
       EXPECT_NEAR(c.force.z, 2 * mg, 0.01 * 2 * mg);
       seen |= 1;
     } else {
-      // Grain pair once; the force is the one on `a` (the lower id, the bottom cube): the
-      // top cube pushes it down, and the normal points from b (top) to a (bottom).
-      EXPECT_EQ(c.a, 0);
-      EXPECT_EQ(c.b, 1);
-      EXPECT_NEAR(c.force.z, -mg, 0.01 * mg);
-      EXPECT_NEAR(c.normal.z, -1.0, 1e-6);
+      // Grain pair once; the force is the one on `a` (the smaller id, the top cube): the
+      // bottom cube holds it up, and the normal points from b (bottom) to a (top).
+      EXPECT_EQ(c.a, 2);
+      EXPECT_EQ(c.b, 5);
+      EXPECT_NEAR(c.force.z, mg, 0.01 * mg);
+      EXPECT_NEAR(c.normal.z, 1.0, 1e-6);
       EXPECT_NEAR(c.point.z, 2e-3, 0.05e-3);
       seen |= 2;
     }
   }
   EXPECT_EQ(seen, 3);
   // Hull inset by the margin: the inflated cubes stand on each other at their true size.
-  const Grain top = state_of(*e, grain(1, s, {}));
+  const Grain top = state_of(*e, grain(2, s, {}));
   EXPECT_NEAR(top.position.z, 3e-3, 0.02e-3);
 }
 
