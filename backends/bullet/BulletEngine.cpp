@@ -50,31 +50,33 @@ const BodyTag* tag_of(const btCollisionObject* o) {
   return static_cast<const BodyTag*>(o->getUserPointer());
 }
 
+// The grain's tag when exactly one body of a crumble pair is a wall, else nullptr.
+const BodyTag* grain_against_wall(const btCollisionObject* b0, const btCollisionObject* b1) {
+  const BodyTag* t0 = tag_of(b0);
+  const BodyTag* t1 = tag_of(b1);
+  if (!t0 || !t1 || (t0->wall >= 0) == (t1->wall >= 0)) return nullptr;
+  return t0->wall >= 0 ? t1 : t0;
+}
+
 // Bullet multiplies the two bodies' friction values; each grain carries √μ so that a pair
 // of the same material gets μ (and a mixed pair √(μa·μb)). Grain–wall pairs take the
 // grain material's wall friction (seeds/000: 0). Bodies not made by crumble keep Bullet's
 // rule.
 btScalar combined_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
-  const BodyTag* t0 = tag_of(b0);
-  const BodyTag* t1 = tag_of(b1);
-  if (t0 && t1) {
-    if (t0->wall >= 0 && t1->wall < 0) return t1->wall_friction;
-    if (t1->wall >= 0 && t0->wall < 0) return t0->wall_friction;
-  }
+  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->wall_friction;
   return std::clamp(b0->getFriction() * b1->getFriction(), btScalar(-10), btScalar(10));
 }
 
+// Rolling friction: the grain material's value against walls, the geometric mean for a
+// grain pair. Bullet reads it as a lever arm in its internal length unit (≈ the reference
+// grain diameter here): the rolling-resistance torque is at most μr·N·unit.
 btScalar combined_rolling_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
+  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->rolling_friction;
   const BodyTag* t0 = tag_of(b0);
   const BodyTag* t1 = tag_of(b1);
-  if (t0 && t1) {
-    if (t0->wall >= 0 && t1->wall < 0) return t1->rolling_friction;
-    if (t1->wall >= 0 && t0->wall < 0) return t0->rolling_friction;
-    return std::sqrt(t0->rolling_friction * t1->rolling_friction);
-  }
-  // Bullet's own rule.
+  if (t0 && t1) return std::sqrt(t0->rolling_friction * t1->rolling_friction);
   return std::clamp(b0->getRollingFriction() * b1->getFriction() + b1->getRollingFriction() * b0->getFriction(),
-                    btScalar(-10), btScalar(10));
+                    btScalar(-10), btScalar(10));  // Bullet's own rule
 }
 
 void install_combine_callbacks() {
@@ -236,6 +238,8 @@ struct BulletEngine::Impl {
     // slower on the packing test and no better for the sliding-friction test.
     config = std::make_unique<btDefaultCollisionConfiguration>();
     dispatcher = std::make_unique<btCollisionDispatcher>(config.get());
+    // Contact breaking threshold relative to each shape's size (gContactBreakingThreshold
+    // 0.02 × bounding radius ≈ 1.7 % of d at our scale), so the global is left alone.
     dispatcher->setDispatcherFlags(dispatcher->getDispatcherFlags() |
                                    btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD);
     broadphase = std::make_unique<btDbvtBroadphase>();

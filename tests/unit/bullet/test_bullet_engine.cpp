@@ -96,13 +96,15 @@ TEST_P(BulletRestingSphere, FloorCarriesTheWeight) {
 
 INSTANTIATE_TEST_SUITE_P(Representations, BulletRestingSphere, ::testing::Values("polyhedron", "sphere"));
 
-// (b) Two cubes stacked: the floor carries 2mg, the cube–cube contact mg.
+// (b) Two cubes stacked: the floor carries 2mg, the cube–cube contact mg. The bottom
+// cube has the larger id and enters first, so Bullet's manifold lists the pair in the
+// order opposite to crumble's (a = the smaller id).
 TEST(BulletEngine, TwoGrainStackCarriesWeightsDownwards) {
   auto e = make_engine();
   const auto s = Shape::box({1e-3, 1e-3, 1e-3});
   e->set_container({10e-3, 10e-3, 10e-3, 0});
-  e->add_grain(grain(0, s, {5e-3, 5e-3, 1.01e-3}));
-  e->add_grain(grain(1, s, {5.2e-3, 4.9e-3, 3.03e-3}, Quat::from_axis_angle({0, 0, 1}, 0.4)));
+  e->add_grain(grain(5, s, {5e-3, 5e-3, 1.01e-3}));
+  e->add_grain(grain(2, s, {5.2e-3, 4.9e-3, 3.03e-3}, Quat::from_axis_angle({0, 0, 1}, 0.4)));
   run(*e, 2000);
   const double mg = mass_of(s) * kG;
   EXPECT_NEAR(e->floor_force(), 2 * mg, 0.01 * 2 * mg);
@@ -111,24 +113,24 @@ TEST(BulletEngine, TwoGrainStackCarriesWeightsDownwards) {
   int seen = 0;
   for (const auto& c : cs) {
     if (c.is_wall()) {
-      EXPECT_EQ(c.a, 0);
+      EXPECT_EQ(c.a, 5);
       EXPECT_EQ(c.wall, kFloor);
       EXPECT_NEAR(c.force.z, 2 * mg, 0.01 * 2 * mg);
       seen |= 1;
     } else {
-      // Grain pair once; the force is the one on `a` (the lower id, the bottom cube): the
-      // top cube pushes it down, and the normal points from b (top) to a (bottom).
-      EXPECT_EQ(c.a, 0);
-      EXPECT_EQ(c.b, 1);
-      EXPECT_NEAR(c.force.z, -mg, 0.01 * mg);
-      EXPECT_NEAR(c.normal.z, -1.0, 1e-6);
+      // Grain pair once; the force is the one on `a` (the smaller id, the top cube): the
+      // bottom cube holds it up, and the normal points from b (bottom) to a (top).
+      EXPECT_EQ(c.a, 2);
+      EXPECT_EQ(c.b, 5);
+      EXPECT_NEAR(c.force.z, mg, 0.01 * mg);
+      EXPECT_NEAR(c.normal.z, 1.0, 1e-6);
       EXPECT_NEAR(c.point.z, 2e-3, 0.05e-3);
       seen |= 2;
     }
   }
   EXPECT_EQ(seen, 3);
   // Hull inset by the margin: the inflated cubes stand on each other at their true size.
-  const Grain top = state_of(*e, grain(1, s, {}));
+  const Grain top = state_of(*e, grain(2, s, {}));
   EXPECT_NEAR(top.position.z, 3e-3, 0.02e-3);
 }
 
@@ -205,8 +207,12 @@ TEST(BulletEngine, LoadedPackingBalancesPlatenFloorAndWeight) {
     if (c.wall == kFloor) sum_floor += c.force.z;
     if (c.wall == kPlaten) sum_platen -= c.force.z;  // force on the grain is downward
     EXPECT_TRUE(is_finite(c.force) && is_finite(c.point) && is_finite(c.normal));
-    if (c.wall == kWallXMin) EXPECT_GT(c.normal.x, 0.99);
-    if (c.wall == kWallYMax) EXPECT_LT(c.normal.y, -0.99);
+    if (c.wall == kWallXMin) {
+      EXPECT_GT(c.normal.x, 0.99);
+    }
+    if (c.wall == kWallYMax) {
+      EXPECT_LT(c.normal.y, -0.99);
+    }
   }
   EXPECT_NEAR(sum_floor, e->floor_force(), 1e-9 * F);
   EXPECT_NEAR(sum_platen, e->platen_force(), 1e-9 * F);
@@ -466,4 +472,50 @@ TEST(BulletEngine, MassScalingKeepsWeightsPhysical) {
   run(*e, 1500);
   const double mg = mass_of(s) * kG;
   EXPECT_NEAR(e->floor_force(), mg, 0.01 * mg);
+}
+
+// Rolling friction in Bullet's convention: a lever arm μr in the internal length unit
+// (here 1/length_scale = 2 mm), so a rolling ball decelerates at μr·L·g / (1.4 r).
+TEST(BulletEngine, RollingFrictionIsALeverArmInTheInternalUnit) {
+  Material mat;
+  mat.rolling_friction = 0.05;
+  mat.wall_friction = 0.5;  // rolls without slipping
+  auto e = make_engine({{"sphere_representation", "sphere"}, {"length_scale", 500}}, {0, 0, -kG}, mat);
+  EXPECT_EQ(e->length_scale(), 0.0);  // fixed at the first grain
+  e->set_container({40e-3, 20e-3, 10e-3, 0});
+  const double r = 1e-3, v0 = 0.02;
+  Grain g = grain(0, Shape::sphere(r), {5e-3, 10e-3, r});
+  g.velocity = {v0, 0, 0};
+  g.angular_velocity = {0, v0 / r, 0};
+  e->add_grain(g);
+  EXPECT_EQ(e->length_scale(), 500.0);
+  run(*e, 1200);  // stops after ≈ 29 ms
+  const Grain s = state_of(*e, g);
+  const double a = mat.rolling_friction * (1 / 500.0) * kG / (1.4 * r);
+  const double expect = v0 * v0 / (2 * a);
+  EXPECT_NEAR(s.position.x - g.position.x, expect, 0.03 * expect);
+  EXPECT_NEAR(s.velocity.x, 0.0, 1e-4);
+}
+
+TEST(BulletPrincipalAxes, JacobiAndQuaternionRoundTrip) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> n;
+  for (int t = 0; t < 200; ++t) {
+    const Quat q = Quat{n(rng), n(rng), n(rng), n(rng)}.normalized();
+    const Quat p = bullet_detail::quat_from_rotation(q.matrix());
+    EXPECT_NEAR(std::abs(p.w * q.w + p.x * q.x + p.y * q.y + p.z * q.z), 1.0, 1e-14);  // all four branches
+    // R diag(m) Rᵀ has principal moments m and axes R (up to order and sign).
+    const Vec3 m{1 + std::abs(n(rng)), 2 + std::abs(n(rng)), 0.1 + std::abs(n(rng))};
+    const Mat3 R = q.matrix();
+    const Mat3 A = R * Mat3::diagonal(m) * R.transposed();
+    const auto pa = bullet_detail::principal_axes(A);
+    const Mat3 back = pa.axes * Mat3::diagonal(pa.moments) * pa.axes.transposed();
+    for (int i = 0; i < 9; ++i) EXPECT_NEAR(back.m[i], A.m[i], 1e-12 * A.trace());
+    const Mat3 axes_q = pa.rotation.matrix();
+    for (int i = 0; i < 9; ++i) EXPECT_NEAR(axes_q.m[i], pa.axes.m[i], 1e-12);
+    EXPECT_NEAR(pa.moments.x + pa.moments.y + pa.moments.z, m.x + m.y + m.z, 1e-12 * A.trace());
+  }
+  Mat3 bad = Mat3::identity();
+  bad(0, 1) = 1;
+  EXPECT_THROW(bullet_detail::principal_axes(bad), std::invalid_argument);
 }
