@@ -1,7 +1,9 @@
 #include "backends/lsdem/LsdemEngine.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -405,34 +407,67 @@ void LsdemEngine::compute_forces(double dt) {
   const std::size_t nb = bodies_.size();
   const std::vector<Wall> W = walls();
 
-  // Broad phase: sweep and prune along x over the bounding spheres' boxes.
-  std::vector<int> order(nb);
-  std::iota(order.begin(), order.end(), 0);
-  auto lo = [&](int i, int a) { return bodies_[i].x[a] - bodies_[i].sd->radius; };
-  auto hi = [&](int i, int a) { return bodies_[i].x[a] + bodies_[i].sd->radius; };
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const double la = lo(a, 0), lb = lo(b, 0);
-    return la < lb || (la == lb && bodies_[a].id < bodies_[b].id);
-  });
+  // Broad phase: bounding spheres hashed into a uniform grid of cells of the largest
+  // diameter (counting sort, so the pair order depends on positions and ids only).
   items_.clear();
-  for (std::size_t oi = 0; oi < nb; ++oi) {
-    const int i = order[oi];
-    const double hx = hi(i, 0);
-    for (std::size_t oj = oi + 1; oj < nb; ++oj) {
-      const int j = order[oj];
-      if (lo(j, 0) > hx) break;
-      bool ov = true;
-      for (int a = 1; a < dim && ov; ++a) ov = lo(j, a) <= hi(i, a) && lo(i, a) <= hi(j, a);
-      if (!ov) continue;
-      // Master: the smaller grain (its nodes are looked up in the other's level set).
-      const Body &A = bodies_[i], &B = bodies_[j];
-      const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
-      const bool i_master = va < vb || (va == vb && A.id < B.id);
-      Item it;
-      it.a = i_master ? i : j;
-      it.b = i_master ? j : i;
-      it.key = {bodies_[it.a].id, bodies_[it.b].id};
-      items_.push_back(std::move(it));
+  if (nb > 1) {
+    double rmax = 0;
+    Aabb dom;
+    for (const auto& b : bodies_) {
+      rmax = std::max(rmax, b.sd->radius);
+      dom.extend(b.x);
+    }
+    double cs = 2 * rmax;
+    std::array<long, 3> nc{1, 1, 1};
+    for (;;) {
+      double cells = 1;
+      for (int a = 0; a < dim; ++a) {
+        nc[a] = static_cast<long>(std::floor((dom.hi[a] - dom.lo[a]) / cs)) + 1;
+        cells *= nc[a];
+      }
+      if (cells <= 8.0 * nb + 4096) break;
+      cs *= 1.5;  // grains spread far apart: coarser cells keep the table small
+    }
+    auto coord = [&](const Vec3& x, int a) {
+      return std::min(nc[a] - 1, static_cast<long>((x[a] - dom.lo[a]) / cs));
+    };
+    const std::size_t ncell = static_cast<std::size_t>(nc[0] * nc[1] * nc[2]);
+    std::vector<std::size_t> cell(nb), start(ncell + 1, 0), sorted(nb);
+    for (std::size_t i = 0; i < nb; ++i) {
+      const Vec3& x = bodies_[i].x;
+      cell[i] = static_cast<std::size_t>(coord(x, 0) + nc[0] * (coord(x, 1) + nc[1] * (dim == 3 ? coord(x, 2) : 0)));
+      ++start[cell[i] + 1];
+    }
+    for (std::size_t c = 0; c < ncell; ++c) start[c + 1] += start[c];
+    {
+      std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < nb; ++i) sorted[fill[cell[i]]++] = i;
+    }
+    for (std::size_t i = 0; i < nb; ++i) {
+      const Body& A = bodies_[i];
+      const long cx = coord(A.x, 0), cy = coord(A.x, 1), cz = dim == 3 ? coord(A.x, 2) : 0;
+      for (long dz = (dim == 3 ? -1 : 0); dz <= (dim == 3 ? 1 : 0); ++dz)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dx = -1; dx <= 1; ++dx) {
+            const long x = cx + dx, y = cy + dy, z = cz + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
+            const std::size_t c = static_cast<std::size_t>(x + nc[0] * (y + nc[1] * z));
+            for (std::size_t k = start[c]; k < start[c + 1]; ++k) {
+              const std::size_t j = sorted[k];
+              if (j <= i) continue;
+              const Body& B = bodies_[j];
+              const double rr = A.sd->radius + B.sd->radius;
+              if (norm2(A.x - B.x) > rr * rr) continue;
+              // Master: the smaller grain (its nodes are looked up in the other's level set).
+              const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
+              const bool i_master = va < vb || (va == vb && A.id < B.id);
+              Item it;
+              it.a = static_cast<int>(i_master ? i : j);
+              it.b = static_cast<int>(i_master ? j : i);
+              it.key = {bodies_[it.a].id, bodies_[it.b].id};
+              items_.push_back(std::move(it));
+            }
+          }
     }
   }
   const std::size_t npairs = items_.size();
@@ -445,7 +480,6 @@ void LsdemEngine::compute_forces(double dt) {
         it.key = {bodies_[i].id, -1 - W[k].id};
         items_.push_back(std::move(it));
       }
-  // (The item order follows the sweep, a function of positions and ids only: deterministic.)
   ++stamp_;
   for (auto& it : items_) {
     auto [h, fresh] = history_.try_emplace(it.key);
@@ -760,13 +794,17 @@ LsdemBenchResult lsdem_bench_phase(LsdemEngine& e, long steps, double dt) {
   if (!std::isfinite(dt)) throw std::invalid_argument("lsdem_bench_phase: no grains (no stable step)");
   e.reset_stats();
   const auto t0 = Clock::now();
+  const std::clock_t c0 = std::clock();
   for (long i = 0; i < steps; ++i) e.step(dt);
   const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
   const LsdemStats& st = e.stats();
   LsdemBenchResult r;
   r.steps = steps;
   r.seconds = sec;
+  r.cpu_seconds = cpu;
   r.ms_per_step = 1e3 * sec / steps;
+  r.cpu_ms_per_step = 1e3 * cpu / steps;
   r.steps_per_second = steps / sec;
   r.node_queries_per_second = st.node_queries / sec;
   r.mean_bbox_overlaps = double(st.bbox_overlaps) / steps;

@@ -67,7 +67,7 @@ struct LsdemStats {
   long node_queries = 0;     // level-set lookups of a node (grain–grain)
   long tree_queries = 0;     // level-set lookups pruning a subtree of nodes
   long wall_node_checks = 0; // node–plane tests
-  long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding boxes overlap
+  long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding spheres overlap
   long contact_pairs = 0;    // pairs with at least one penetrating node (summed over steps)
   long penetrating_nodes = 0;
   double seconds = 0;        // wall time inside step()
@@ -79,8 +79,10 @@ struct LsdemStats {
 
 struct LsdemBenchResult {
   long steps = 0;
-  double seconds = 0;
-  double ms_per_step = 0;
+  double seconds = 0;      // wall time
+  double cpu_seconds = 0;  // process CPU time (all threads): robust on a shared machine
+  double ms_per_step = 0;  // wall
+  double cpu_ms_per_step = 0;
   double steps_per_second = 0;
   double node_queries_per_second = 0;
   double mean_bbox_overlaps = 0;  // per step
