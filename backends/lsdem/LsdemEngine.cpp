@@ -49,6 +49,7 @@ struct LsdemEngine::Body {
 struct LsdemEngine::Item {
   int a = -1, b = -1;  // body indices; b < 0: wall index −1 − k
   std::pair<GrainId, GrainId> key;
+  bool shape_wall = false;  // b indexes walls_kin_ instead of bodies_
   PairState* st = nullptr;  // persistent state of the key (pointer-stable)
   bool fresh = true;         // no state from the previous step
   Vec3 fa, ta, tb;
@@ -243,6 +244,48 @@ void LsdemEngine::remove_grain(GrainId id) {
   for (auto h = history_.begin(); h != history_.end();)
     h = h->first.first == id || h->first.second == id ? history_.erase(h) : std::next(h);
 }
+
+int LsdemEngine::add_shape_wall(const Shape::Ptr& shape, const Vec3& position, const Quat& orientation) {
+  if (!shape) throw std::invalid_argument("lsdem: shape wall without a shape");
+  if (shape->dimension() != ctx_.dimension)
+    throw std::invalid_argument("lsdem: shape wall " + shape->describe() + " is " +
+                                std::to_string(shape->dimension()) + "D but the engine is " +
+                                std::to_string(ctx_.dimension) + "D");
+  if (!is_finite(position)) throw std::invalid_argument("lsdem: shape wall position is not finite");
+  ShapeData& sd = shape_data(shape);
+  sd.users++;
+  Body b;
+  b.id = -1 - (kFirstShapeWall + static_cast<GrainId>(walls_kin_.size()));
+  b.sd = &sd;
+  b.x = position;
+  b.q = orientation.normalized();
+  if (ctx_.dimension == 2) {
+    b.x.z = 0;
+    const double n = std::hypot(b.q.w, b.q.z);
+    b.q = Quat{b.q.w / n, 0, 0, b.q.z / n};
+  }
+  b.R = b.q.matrix();
+  walls_kin_.push_back(b);
+  shape_wall_force_.push_back({});
+  return static_cast<int>(walls_kin_.size()) - 1;
+}
+
+void LsdemEngine::set_shape_wall_motion(int wall, const Vec3& v, const Vec3& w) {
+  if (wall < 0 || wall >= static_cast<int>(walls_kin_.size()))
+    throw std::invalid_argument("lsdem: no shape wall " + std::to_string(wall));
+  if (!is_finite(v) || !is_finite(w)) throw std::invalid_argument("lsdem: shape wall motion is not finite");
+  Body& b = walls_kin_[wall];
+  b.v = v;
+  b.w = w;
+  if (ctx_.dimension == 2) {
+    b.v.z = 0;
+    b.w = {0, 0, w.z};
+  }
+}
+
+Vec3 LsdemEngine::shape_wall_position(int wall) const { return walls_kin_.at(wall).x; }
+Quat LsdemEngine::shape_wall_orientation(int wall) const { return walls_kin_.at(wall).q; }
+Vec3 LsdemEngine::shape_wall_force(int wall) const { return shape_wall_force_.at(wall); }
 
 void LsdemEngine::read_state(std::span<Grain> grains) const {
   for (auto& g : grains) {
@@ -470,6 +513,18 @@ void LsdemEngine::compute_forces(double dt) {
           }
     }
   }
+  for (std::size_t i = 0; i < nb; ++i)
+    for (std::size_t k = 0; k < walls_kin_.size(); ++k) {
+      const Body &A = bodies_[i], &B = walls_kin_[k];
+      const double rr = A.sd->radius + B.sd->radius;
+      if (norm2(A.x - B.x) > rr * rr) continue;
+      Item it;
+      it.a = static_cast<int>(i);
+      it.b = static_cast<int>(k);
+      it.shape_wall = true;
+      it.key = {A.id, B.id};
+      items_.push_back(std::move(it));
+    }
   const std::size_t npairs = items_.size();
   for (std::size_t i = 0; i < nb; ++i)
     for (std::size_t k = 0; k < W.size(); ++k)
@@ -509,7 +564,7 @@ void LsdemEngine::compute_forces(double dt) {
       L.ks_ratio = s_.ks_ratio;
       L.zeta = zeta;
       if (it.b >= 0) {
-        const Body& B = bodies_[it.b];
+        const Body& B = it.shape_wall ? walls_kin_[it.b] : bodies_[it.b];
         const ShapeData& sb = *B.sd;
         const LevelSetGrid& gb = *sb.grid;
         const Mat3 RbT = B.R.transposed();
@@ -584,10 +639,17 @@ void LsdemEngine::compute_forces(double dt) {
           }
         }
         const Material& mb = ctx_.materials[B.material];
-        L.kn = s_.kn;
-        L.mu = std::min(ma.friction, mb.friction);
-        L.mstar = A.m * B.m / (A.m + B.m);
-        if (L.hertz) {
+        if (it.shape_wall) {
+          L.kn = s_.wall_kn;
+          L.mu = ma.wall_friction;
+          L.mstar = A.m;
+          if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
+        } else {
+          L.kn = s_.kn;
+          L.mu = std::min(ma.friction, mb.friction);
+          L.mstar = A.m * B.m / (A.m + B.m);
+        }
+        if (L.hertz && !it.shape_wall) {
           const double estar =
               1.0 / ((1 - ma.poisson * ma.poisson) / ma.young + (1 - mb.poisson * mb.poisson) / mb.young);
           const double rstar = sa.r_eq * sb.r_eq / (sa.r_eq + sb.r_eq);
@@ -648,6 +710,7 @@ void LsdemEngine::compute_forces(double dt) {
   contacts_.clear();
   platen_force_ = 0;
   floor_force_ = 0;
+  for (auto& f : shape_wall_force_) f = {};
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
     Item& it = items_[k];
@@ -664,7 +727,10 @@ void LsdemEngine::compute_forces(double dt) {
     c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
     c.normal = normalized(it.normal);
     c.force = it.fa;
-    if (it.b >= 0) {
+    if (it.shape_wall) {
+      c.wall = kFirstShapeWall + it.b;
+      shape_wall_force_[it.b] -= it.fa;
+    } else if (it.b >= 0) {
       Body& B = bodies_[it.b];
       B.f -= it.fa;
       B.t += it.tb;
@@ -718,6 +784,15 @@ void LsdemEngine::integrate(double dt) {
     }
     b.R = b.q.matrix();
     b.turned = norm(b.w) * dt;
+  }
+  // Shape walls move kinematically.
+  for (auto& b : walls_kin_) {
+    b.x += b.v * dt;
+    const double wn = norm(b.w);
+    if (wn > 0) b.q = (Quat::from_axis_angle(b.w, wn * dt) * b.q).normalized();
+    b.R = b.q.matrix();
+    b.moved = norm(b.v) * dt;
+    b.turned = wn * dt;
   }
   // Platen along the vertical axis.
   if (has_container_ && container_.height > 0) {

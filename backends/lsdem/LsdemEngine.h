@@ -113,6 +113,19 @@ class LsdemEngine final : public Engine {
   double platen_force() const override { return platen_force_; }
   double floor_force() const override { return floor_force_; }
 
+  // Rigid walls of any shape (crusher plates): a closed TriMesh through
+  // Shape::polyhedron, a box, or in 2D a polygon; the shape's level set is used, and its
+  // surface nodes are not (grains are always the master side). Kinematic: they move with
+  // the velocity and angular velocity (world frame, about the shape's centroid) given by
+  // set_shape_wall_motion. Contacts name them wall = kFirstShapeWall + index.
+  static constexpr int kFirstShapeWall = 6;
+  int add_shape_wall(const Shape::Ptr& shape, const Vec3& position, const Quat& orientation = {});
+  void set_shape_wall_motion(int wall, const Vec3& velocity, const Vec3& angular_velocity);
+  // Pose of a shape wall, and the total force (N) the grains exert on it.
+  Vec3 shape_wall_position(int wall) const;
+  Quat shape_wall_orientation(int wall) const;
+  Vec3 shape_wall_force(int wall) const;
+
   const LsdemSettings& settings() const { return s_; }
   const LsdemStats& stats() const { return stats_; }
   void reset_stats() { stats_ = LsdemStats{}; }
@@ -162,6 +175,8 @@ class LsdemEngine final : public Engine {
   bool has_container_ = false;
   std::map<const Shape*, std::shared_ptr<ShapeData>> shapes_;
   std::vector<Body> bodies_;
+  std::vector<Body> walls_kin_;         // shape walls (kinematic)
+  std::vector<Vec3> shape_wall_force_;  // force of the grains on each shape wall
   std::unordered_map<GrainId, std::size_t> index_;
   // Per (master, partner) key; partner < 0: wall −1 − id.
   std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> history_;
