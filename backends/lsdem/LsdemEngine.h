@@ -32,9 +32,16 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
+// Contact search: bounding spheres hashed into a uniform grid of cells (broad phase); per
+// pair, a sphere tree over the master's nodes pruned against the partner's bounding sphere,
+// node box and level set (|∇φ| ≤ √dim for the trilinear interpolant of distance samples);
+// the nodes found within a skin of half a grid cell are kept as candidates, and only they
+// are looked up while the accumulated bound on their relative motion stays below
+// skin/√dim (exact: the same nodes are found as by a full search).
+//
 // Determinism: the narrow phase runs in parallel over (pair | grain–wall) work items, each
-// writing its own slot; forces are then summed in the fixed order of the sorted items, so
-// results are bitwise independent of the thread count.
+// writing its own slot; forces are then summed in the fixed order of the items (a function
+// of positions and ids), so results are bitwise independent of the thread count.
 #pragma once
 #include <cstdint>
 #include <map>
