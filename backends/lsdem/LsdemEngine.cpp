@@ -1,7 +1,9 @@
 #include "backends/lsdem/LsdemEngine.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -47,6 +49,7 @@ struct LsdemEngine::Body {
 struct LsdemEngine::Item {
   int a = -1, b = -1;  // body indices; b < 0: wall index −1 − k
   std::pair<GrainId, GrainId> key;
+  bool shape_wall = false;  // b indexes walls_kin_ instead of bodies_
   PairState* st = nullptr;  // persistent state of the key (pointer-stable)
   bool fresh = true;         // no state from the previous step
   Vec3 fa, ta, tb;
@@ -242,6 +245,48 @@ void LsdemEngine::remove_grain(GrainId id) {
     h = h->first.first == id || h->first.second == id ? history_.erase(h) : std::next(h);
 }
 
+int LsdemEngine::add_shape_wall(const Shape::Ptr& shape, const Vec3& position, const Quat& orientation) {
+  if (!shape) throw std::invalid_argument("lsdem: shape wall without a shape");
+  if (shape->dimension() != ctx_.dimension)
+    throw std::invalid_argument("lsdem: shape wall " + shape->describe() + " is " +
+                                std::to_string(shape->dimension()) + "D but the engine is " +
+                                std::to_string(ctx_.dimension) + "D");
+  if (!is_finite(position)) throw std::invalid_argument("lsdem: shape wall position is not finite");
+  ShapeData& sd = shape_data(shape);
+  sd.users++;
+  Body b;
+  b.id = -1 - (kFirstShapeWall + static_cast<GrainId>(walls_kin_.size()));
+  b.sd = &sd;
+  b.x = position;
+  b.q = orientation.normalized();
+  if (ctx_.dimension == 2) {
+    b.x.z = 0;
+    const double n = std::hypot(b.q.w, b.q.z);
+    b.q = Quat{b.q.w / n, 0, 0, b.q.z / n};
+  }
+  b.R = b.q.matrix();
+  walls_kin_.push_back(b);
+  shape_wall_force_.push_back({});
+  return static_cast<int>(walls_kin_.size()) - 1;
+}
+
+void LsdemEngine::set_shape_wall_motion(int wall, const Vec3& v, const Vec3& w) {
+  if (wall < 0 || wall >= static_cast<int>(walls_kin_.size()))
+    throw std::invalid_argument("lsdem: no shape wall " + std::to_string(wall));
+  if (!is_finite(v) || !is_finite(w)) throw std::invalid_argument("lsdem: shape wall motion is not finite");
+  Body& b = walls_kin_[wall];
+  b.v = v;
+  b.w = w;
+  if (ctx_.dimension == 2) {
+    b.v.z = 0;
+    b.w = {0, 0, w.z};
+  }
+}
+
+Vec3 LsdemEngine::shape_wall_position(int wall) const { return walls_kin_.at(wall).x; }
+Quat LsdemEngine::shape_wall_orientation(int wall) const { return walls_kin_.at(wall).q; }
+Vec3 LsdemEngine::shape_wall_force(int wall) const { return shape_wall_force_.at(wall); }
+
 void LsdemEngine::read_state(std::span<Grain> grains) const {
   for (auto& g : grains) {
     auto it = index_.find(g.id);
@@ -405,36 +450,81 @@ void LsdemEngine::compute_forces(double dt) {
   const std::size_t nb = bodies_.size();
   const std::vector<Wall> W = walls();
 
-  // Broad phase: sweep and prune along x over the bounding spheres' boxes.
-  std::vector<int> order(nb);
-  std::iota(order.begin(), order.end(), 0);
-  auto lo = [&](int i, int a) { return bodies_[i].x[a] - bodies_[i].sd->radius; };
-  auto hi = [&](int i, int a) { return bodies_[i].x[a] + bodies_[i].sd->radius; };
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const double la = lo(a, 0), lb = lo(b, 0);
-    return la < lb || (la == lb && bodies_[a].id < bodies_[b].id);
-  });
+  // Broad phase: bounding spheres hashed into a uniform grid of cells of the largest
+  // diameter (counting sort, so the pair order depends on positions and ids only).
   items_.clear();
-  for (std::size_t oi = 0; oi < nb; ++oi) {
-    const int i = order[oi];
-    const double hx = hi(i, 0);
-    for (std::size_t oj = oi + 1; oj < nb; ++oj) {
-      const int j = order[oj];
-      if (lo(j, 0) > hx) break;
-      bool ov = true;
-      for (int a = 1; a < dim && ov; ++a) ov = lo(j, a) <= hi(i, a) && lo(i, a) <= hi(j, a);
-      if (!ov) continue;
-      // Master: the smaller grain (its nodes are looked up in the other's level set).
-      const Body &A = bodies_[i], &B = bodies_[j];
-      const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
-      const bool i_master = va < vb || (va == vb && A.id < B.id);
-      Item it;
-      it.a = i_master ? i : j;
-      it.b = i_master ? j : i;
-      it.key = {bodies_[it.a].id, bodies_[it.b].id};
-      items_.push_back(std::move(it));
+  if (nb > 1) {
+    double rmax = 0;
+    Aabb dom;
+    for (const auto& b : bodies_) {
+      rmax = std::max(rmax, b.sd->radius);
+      dom.extend(b.x);
+    }
+    double cs = 2 * rmax;
+    std::array<long, 3> nc{1, 1, 1};
+    for (;;) {
+      double cells = 1;
+      for (int a = 0; a < dim; ++a) {
+        nc[a] = static_cast<long>(std::floor((dom.hi[a] - dom.lo[a]) / cs)) + 1;
+        cells *= nc[a];
+      }
+      if (cells <= 8.0 * nb + 4096) break;
+      cs *= 1.5;  // grains spread far apart: coarser cells keep the table small
+    }
+    auto coord = [&](const Vec3& x, int a) {
+      return std::min(nc[a] - 1, static_cast<long>((x[a] - dom.lo[a]) / cs));
+    };
+    const std::size_t ncell = static_cast<std::size_t>(nc[0] * nc[1] * nc[2]);
+    std::vector<std::size_t> cell(nb), start(ncell + 1, 0), sorted(nb);
+    for (std::size_t i = 0; i < nb; ++i) {
+      const Vec3& x = bodies_[i].x;
+      cell[i] = static_cast<std::size_t>(coord(x, 0) + nc[0] * (coord(x, 1) + nc[1] * (dim == 3 ? coord(x, 2) : 0)));
+      ++start[cell[i] + 1];
+    }
+    for (std::size_t c = 0; c < ncell; ++c) start[c + 1] += start[c];
+    {
+      std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < nb; ++i) sorted[fill[cell[i]]++] = i;
+    }
+    for (std::size_t i = 0; i < nb; ++i) {
+      const Body& A = bodies_[i];
+      const long cx = coord(A.x, 0), cy = coord(A.x, 1), cz = dim == 3 ? coord(A.x, 2) : 0;
+      for (long dz = (dim == 3 ? -1 : 0); dz <= (dim == 3 ? 1 : 0); ++dz)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dx = -1; dx <= 1; ++dx) {
+            const long x = cx + dx, y = cy + dy, z = cz + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
+            const std::size_t c = static_cast<std::size_t>(x + nc[0] * (y + nc[1] * z));
+            for (std::size_t k = start[c]; k < start[c + 1]; ++k) {
+              const std::size_t j = sorted[k];
+              if (j <= i) continue;
+              const Body& B = bodies_[j];
+              const double rr = A.sd->radius + B.sd->radius;
+              if (norm2(A.x - B.x) > rr * rr) continue;
+              // Master: the smaller grain (its nodes are looked up in the other's level set).
+              const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
+              const bool i_master = va < vb || (va == vb && A.id < B.id);
+              Item it;
+              it.a = static_cast<int>(i_master ? i : j);
+              it.b = static_cast<int>(i_master ? j : i);
+              it.key = {bodies_[it.a].id, bodies_[it.b].id};
+              items_.push_back(std::move(it));
+            }
+          }
     }
   }
+  for (std::size_t i = 0; i < nb; ++i)
+    for (std::size_t k = 0; k < walls_kin_.size(); ++k) {
+      const Body &A = bodies_[i], &B = walls_kin_[k];
+      const double rr = A.sd->radius + B.sd->radius;
+      if (norm2(A.x - B.x) > rr * rr) continue;
+      Item it;
+      it.a = static_cast<int>(i);
+      it.b = static_cast<int>(k);
+      it.shape_wall = true;
+      it.key = {A.id, B.id};
+      items_.push_back(std::move(it));
+    }
   const std::size_t npairs = items_.size();
   for (std::size_t i = 0; i < nb; ++i)
     for (std::size_t k = 0; k < W.size(); ++k)
@@ -445,7 +535,6 @@ void LsdemEngine::compute_forces(double dt) {
         it.key = {bodies_[i].id, -1 - W[k].id};
         items_.push_back(std::move(it));
       }
-  // (The item order follows the sweep, a function of positions and ids only: deterministic.)
   ++stamp_;
   for (auto& it : items_) {
     auto [h, fresh] = history_.try_emplace(it.key);
@@ -475,7 +564,7 @@ void LsdemEngine::compute_forces(double dt) {
       L.ks_ratio = s_.ks_ratio;
       L.zeta = zeta;
       if (it.b >= 0) {
-        const Body& B = bodies_[it.b];
+        const Body& B = it.shape_wall ? walls_kin_[it.b] : bodies_[it.b];
         const ShapeData& sb = *B.sd;
         const LevelSetGrid& gb = *sb.grid;
         const Mat3 RbT = B.R.transposed();
@@ -550,10 +639,17 @@ void LsdemEngine::compute_forces(double dt) {
           }
         }
         const Material& mb = ctx_.materials[B.material];
-        L.kn = s_.kn;
-        L.mu = std::min(ma.friction, mb.friction);
-        L.mstar = A.m * B.m / (A.m + B.m);
-        if (L.hertz) {
+        if (it.shape_wall) {
+          L.kn = s_.wall_kn;
+          L.mu = ma.wall_friction;
+          L.mstar = A.m;
+          if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
+        } else {
+          L.kn = s_.kn;
+          L.mu = std::min(ma.friction, mb.friction);
+          L.mstar = A.m * B.m / (A.m + B.m);
+        }
+        if (L.hertz && !it.shape_wall) {
           const double estar =
               1.0 / ((1 - ma.poisson * ma.poisson) / ma.young + (1 - mb.poisson * mb.poisson) / mb.young);
           const double rstar = sa.r_eq * sb.r_eq / (sa.r_eq + sb.r_eq);
@@ -614,6 +710,7 @@ void LsdemEngine::compute_forces(double dt) {
   contacts_.clear();
   platen_force_ = 0;
   floor_force_ = 0;
+  for (auto& f : shape_wall_force_) f = {};
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
     Item& it = items_[k];
@@ -630,7 +727,10 @@ void LsdemEngine::compute_forces(double dt) {
     c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
     c.normal = normalized(it.normal);
     c.force = it.fa;
-    if (it.b >= 0) {
+    if (it.shape_wall) {
+      c.wall = kFirstShapeWall + it.b;
+      shape_wall_force_[it.b] -= it.fa;
+    } else if (it.b >= 0) {
       Body& B = bodies_[it.b];
       B.f -= it.fa;
       B.t += it.tb;
@@ -684,6 +784,15 @@ void LsdemEngine::integrate(double dt) {
     }
     b.R = b.q.matrix();
     b.turned = norm(b.w) * dt;
+  }
+  // Shape walls move kinematically.
+  for (auto& b : walls_kin_) {
+    b.x += b.v * dt;
+    const double wn = norm(b.w);
+    if (wn > 0) b.q = (Quat::from_axis_angle(b.w, wn * dt) * b.q).normalized();
+    b.R = b.q.matrix();
+    b.moved = norm(b.v) * dt;
+    b.turned = wn * dt;
   }
   // Platen along the vertical axis.
   if (has_container_ && container_.height > 0) {
@@ -760,13 +869,17 @@ LsdemBenchResult lsdem_bench_phase(LsdemEngine& e, long steps, double dt) {
   if (!std::isfinite(dt)) throw std::invalid_argument("lsdem_bench_phase: no grains (no stable step)");
   e.reset_stats();
   const auto t0 = Clock::now();
+  const std::clock_t c0 = std::clock();
   for (long i = 0; i < steps; ++i) e.step(dt);
   const double sec = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
   const LsdemStats& st = e.stats();
   LsdemBenchResult r;
   r.steps = steps;
   r.seconds = sec;
+  r.cpu_seconds = cpu;
   r.ms_per_step = 1e3 * sec / steps;
+  r.cpu_ms_per_step = 1e3 * cpu / steps;
   r.steps_per_second = steps / sec;
   r.node_queries_per_second = st.node_queries / sec;
   r.mean_bbox_overlaps = double(st.bbox_overlaps) / steps;

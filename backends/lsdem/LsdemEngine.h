@@ -32,9 +32,16 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
+// Contact search: bounding spheres hashed into a uniform grid of cells (broad phase); per
+// pair, a sphere tree over the master's nodes pruned against the partner's bounding sphere,
+// node box and level set (|∇φ| ≤ √dim for the trilinear interpolant of distance samples);
+// the nodes found within a skin of half a grid cell are kept as candidates, and only they
+// are looked up while the accumulated bound on their relative motion stays below
+// skin/√dim (exact: the same nodes are found as by a full search).
+//
 // Determinism: the narrow phase runs in parallel over (pair | grain–wall) work items, each
-// writing its own slot; forces are then summed in the fixed order of the sorted items, so
-// results are bitwise independent of the thread count.
+// writing its own slot; forces are then summed in the fixed order of the items (a function
+// of positions and ids), so results are bitwise independent of the thread count.
 #pragma once
 #include <cstdint>
 #include <map>
@@ -67,7 +74,7 @@ struct LsdemStats {
   long node_queries = 0;     // level-set lookups of a node (grain–grain)
   long tree_queries = 0;     // level-set lookups pruning a subtree of nodes
   long wall_node_checks = 0; // node–plane tests
-  long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding boxes overlap
+  long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding spheres overlap
   long contact_pairs = 0;    // pairs with at least one penetrating node (summed over steps)
   long penetrating_nodes = 0;
   double seconds = 0;        // wall time inside step()
@@ -79,8 +86,10 @@ struct LsdemStats {
 
 struct LsdemBenchResult {
   long steps = 0;
-  double seconds = 0;
-  double ms_per_step = 0;
+  double seconds = 0;      // wall time
+  double cpu_seconds = 0;  // process CPU time (all threads): robust on a shared machine
+  double ms_per_step = 0;  // wall
+  double cpu_ms_per_step = 0;
   double steps_per_second = 0;
   double node_queries_per_second = 0;
   double mean_bbox_overlaps = 0;  // per step
@@ -110,6 +119,19 @@ class LsdemEngine final : public Engine {
   double platen_position() const override { return platen_pos_; }
   double platen_force() const override { return platen_force_; }
   double floor_force() const override { return floor_force_; }
+
+  // Rigid walls of any shape (crusher plates): a closed TriMesh through
+  // Shape::polyhedron, a box, or in 2D a polygon; the shape's level set is used, and its
+  // surface nodes are not (grains are always the master side). Kinematic: they move with
+  // the velocity and angular velocity (world frame, about the shape's centroid) given by
+  // set_shape_wall_motion. Contacts name them wall = kFirstShapeWall + index.
+  static constexpr int kFirstShapeWall = 6;
+  int add_shape_wall(const Shape::Ptr& shape, const Vec3& position, const Quat& orientation = {});
+  void set_shape_wall_motion(int wall, const Vec3& velocity, const Vec3& angular_velocity);
+  // Pose of a shape wall, and the total force (N) the grains exert on it.
+  Vec3 shape_wall_position(int wall) const;
+  Quat shape_wall_orientation(int wall) const;
+  Vec3 shape_wall_force(int wall) const;
 
   const LsdemSettings& settings() const { return s_; }
   const LsdemStats& stats() const { return stats_; }
@@ -160,6 +182,8 @@ class LsdemEngine final : public Engine {
   bool has_container_ = false;
   std::map<const Shape*, std::shared_ptr<ShapeData>> shapes_;
   std::vector<Body> bodies_;
+  std::vector<Body> walls_kin_;         // shape walls (kinematic)
+  std::vector<Vec3> shape_wall_force_;  // force of the grains on each shape wall
   std::unordered_map<GrainId, std::size_t> index_;
   // Per (master, partner) key; partner < 0: wall −1 − id.
   std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> history_;
