@@ -60,9 +60,10 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
 
   attach_standard_observers(sc, out);
+  const auto t_loading = std::chrono::steady_clock::now();
   auto progress = [&](const RunState& s, double f) {
     if (quiet) return;
-    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_loading).count();
     std::cerr << format_progress(s, f, el) << "\n";
   };
   RunSummary sum = sim.run(progress);

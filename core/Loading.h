@@ -11,7 +11,7 @@ struct PlatenCommand {
 };
 
 struct LoadingSettings {
-  std::string mode = "stress_ramp";  // "stress_ramp" | "strain_rate"
+  std::string mode = "stress_ramp";  // "stress_ramp" | "strain_rate" | "none" (platen held still)
   double max_stress = 1e6;           // Pa, ramp end value
   double ramp_time = 0.1;            // s
   double hold_time = 0.0;            // s at max_stress after the ramp
@@ -20,6 +20,7 @@ struct LoadingSettings {
   double stop_stress = 0;            // Pa; 0 = none (strain_rate mode: required or stop_strain)
   double stop_force = 0;             // N; 0 = none
   double stop_strain = 0;            // 0 = none
+  double duration = 0;               // s; "none" mode: simulated time (0 = until max_steps)
 };
 
 class Loading {

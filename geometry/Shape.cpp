@@ -350,6 +350,30 @@ double Shape::equivalent_diameter() const {
   return std::cbrt(6.0 * mass_.volume / kPi);
 }
 
+double Shape::bounding_radius() const {
+  switch (kind_) {
+    case ShapeKind::Sphere:
+    case ShapeKind::Disk: return params_[0];
+    case ShapeKind::Ellipsoid: return std::max({params_[0], params_[1], params_[2]});
+    case ShapeKind::Ellipse:
+    case ShapeKind::Superellipse: {
+      if (kind_ == ShapeKind::Ellipse || params_[2] <= 1) return std::max(params_[0], params_[1]);
+      break;  // squarish superellipse: farthest point off the axes
+    }
+    case ShapeKind::Box: return norm(Vec3{params_[0], params_[1], params_[2]});
+    default: break;
+  }
+  // Polytopes: the farthest point is a vertex. Smooth shapes: vertices of the lazily built
+  // surface, which lie on the surface (exact at the extremes for the tessellations here).
+  double r = 0;
+  if (dimension_ == 3) {
+    for (const auto& v : mesh().vertices) r = std::max(r, norm(v));
+  } else {
+    for (const auto& v : outline()) r = std::max(r, norm(v));
+  }
+  return r;
+}
+
 double Shape::signed_distance(const Vec3& p) const {
   switch (kind_) {
     case ShapeKind::Sphere: return norm(p) - params_[0];

@@ -73,6 +73,8 @@ class Shape {
   // Diameter of the sphere (3D) or disk (2D) of equal volume (area).
   double equivalent_diameter() const;
   Aabb bounds() const { return bounds_; }
+  // Radius of the smallest origin-centred sphere (2D: disk) containing the shape.
+  double bounding_radius() const;
 
   // Negative inside. Exact for sphere, disk, box, polygon and meshes; for the other
   // analytic shapes a consistent approximation (exact zero set and sign); level_set()

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <map>
 #include <unordered_map>
 
 #include "scenarios/ShapeSpec.h"
@@ -43,11 +46,6 @@ Quat random_orientation(Rng& rng, int dim) {
       .normalized();
 }
 
-double bounding_radius(const Shape& s) {
-  const Aabb b = s.bounds();
-  return norm(cwise_max(cwise_max(b.hi, -b.lo), Vec3{0, 0, 0}));
-}
-
 Json scaled_spec(const Json& tmpl, double factor) {
   Json j = tmpl;
   j["scale"] = j.value("scale", 1.0) * factor;
@@ -67,42 +65,66 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
 
   if (spec.type == "cloud") {
     const long count = pc.integer("count", 100, 1, 10000000);
+    // Sizes: a PSD by mass, or one "diameter" for all grains.
     std::vector<PsdPoint> psd;
-    const auto& pj = pc.raw("psd");
-    if (!pj.is_array() || pj.size() < 2) pc.fail("psd", "expected at least two [diameter_m, fraction_passing] pairs");
-    for (std::size_t i = 0; i < pj.size(); ++i) {
-      const std::string where = "psd/" + std::to_string(i);
-      if (!pj[i].is_array() || pj[i].size() != 2 || !pj[i][0].is_number() || !pj[i][1].is_number())
-        pc.fail(where, "expected [diameter_m, fraction_passing]");
-      PsdPoint p{pj[i][0].get<double>(), pj[i][1].get<double>()};
-      if (!(p.diameter > 0) || !std::isfinite(p.diameter)) pc.fail(where + "/0", "diameter must be > 0");
-      if (!(p.passing >= 0 && p.passing <= 1)) pc.fail(where + "/1", "fraction passing must be in [0, 1]");
-      if (i > 0 && (p.diameter <= psd.back().diameter || p.passing < psd.back().passing))
-        pc.fail(where, "PSD must increase in diameter and not decrease in fraction passing");
-      psd.push_back(p);
+    double mono = 0;
+    if (pc.has("diameter")) {
+      mono = pc.positive("diameter");
+      if (pc.has("psd")) pc.fail("psd", "give either psd or diameter, not both");
+    } else {
+      const auto& pj = pc.raw("psd");
+      if (!pj.is_array() || pj.size() < 2) pc.fail("psd", "expected at least two [diameter_m, fraction_passing] pairs");
+      for (std::size_t i = 0; i < pj.size(); ++i) {
+        const std::string where = "psd/" + std::to_string(i);
+        if (!pj[i].is_array() || pj[i].size() != 2 || !pj[i][0].is_number() || !pj[i][1].is_number())
+          pc.fail(where, "expected [diameter_m, fraction_passing]");
+        PsdPoint p{pj[i][0].get<double>(), pj[i][1].get<double>()};
+        if (!(p.diameter > 0) || !std::isfinite(p.diameter)) pc.fail(where + "/0", "diameter must be > 0");
+        if (!(p.passing >= 0 && p.passing <= 1)) pc.fail(where + "/1", "fraction passing must be in [0, 1]");
+        if (i > 0 && (p.diameter <= psd.back().diameter || p.passing < psd.back().passing))
+          pc.fail(where, "PSD must increase in diameter and not decrease in fraction passing");
+        psd.push_back(p);
+      }
+      if (psd.back().passing != 1.0) pc.fail("psd", "the last point must have fraction passing 1");
     }
-    if (psd.back().passing != 1.0) pc.fail("psd", "the last point must have fraction passing 1");
-    Config sc = pc.child("shape");
-    const Shape::Ptr tmpl = shape_from_config(sc, dim, /*unit_size=*/true);
-    const Json tmpl_json = sc.doc();
+    // One template, or several drawn uniformly per grain; each scaled to the drawn size.
+    std::vector<Shape::Ptr> tmpls;
+    std::vector<Json> tmpl_json;
+    if (pc.doc().contains("shape") && pc.doc()["shape"].is_array()) {
+      for (auto& sc : pc.children("shape")) {
+        tmpls.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
+        tmpl_json.push_back(sc.doc());
+      }
+      if (tmpls.empty()) pc.fail("shape", "needs at least one shape template");
+    } else {
+      Config sc = pc.child("shape");
+      tmpls.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
+      tmpl_json.push_back(sc.doc());
+    }
     const double fill = pc.number("fill_fraction", dim == 3 ? 0.2 : 0.35, 0.01, 0.5);
     const int material = static_cast<int>(pc.integer("material", 0, 0));
     Config st = pc.child("settle");
-    spec.settle = true;
+    spec.settle = st.boolean("enabled", true);
     spec.settle_settings.stress = st.number("stress", 10e3, 0.0);
     spec.settle_settings.max_steps = st.integer("max_steps", 20000, 1);
     spec.settle_settings.dt = st.number("dt", 0.0, 0.0);
-    spec.settle_settings.tolerance = st.positive("tolerance", 1e-4);
+    spec.settle_settings.tolerance = st.positive("tolerance", 1e-3);
     spec.settle_settings.window = st.integer("window", 200, 1);
 
-    const auto diam = sample_psd(psd, static_cast<std::size_t>(count), rng);
+    const auto diam = mono > 0 ? std::vector<double>(static_cast<std::size_t>(count), mono)
+                               : sample_psd(psd, static_cast<std::size_t>(count), rng);
     double vs = 0;
     std::vector<Shape::Ptr> shapes;
-    std::unordered_map<long, Shape::Ptr> cache;  // identical sizes share a Shape
+    std::vector<std::size_t> which;
+    // Grains of the same template and size share one Shape (and so one level set / hull).
+    std::map<std::pair<std::size_t, double>, Shape::Ptr> cache;
     for (double d : diam) {
-      const double f = d / tmpl->equivalent_diameter();
-      shapes.push_back(tmpl->scaled(f));
-      vs += shapes.back()->volume();
+      const std::size_t t = tmpls.size() == 1 ? 0 : static_cast<std::size_t>(rng.uniform() * tmpls.size()) % tmpls.size();
+      auto& sh = cache[{t, d}];
+      if (!sh) sh = tmpls[t]->scaled(d / tmpls[t]->equivalent_diameter());
+      shapes.push_back(sh);
+      which.push_back(t);
+      vs += sh->volume();
     }
     const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
     const double cloud_h = vs / (fill * area);
@@ -117,7 +139,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     std::vector<std::size_t> placed;
     const double top = spec.container.height;
     for (std::size_t k : order) {
-      const double r = bounding_radius(*shapes[k]) * 1.01;
+      const double r = shapes[k]->bounding_radius() * 1.01;
       rad[k] = r;
       if (2 * r > spec.container.lx || (dim == 3 && 2 * r > spec.container.ly) || 2 * r > top)
         pc.fail("count", "a grain of diameter " + std::to_string(diam[k]) + " m does not fit in the container");
@@ -146,7 +168,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     for (std::size_t i = 0; i < shapes.size(); ++i) {
       PlacedGrain g;
       g.shape = shapes[i];
-      g.shape_spec = scaled_spec(tmpl_json, diam[i] / tmpl->equivalent_diameter());
+      g.shape_spec = scaled_spec(tmpl_json[which[i]], diam[i] / tmpls[which[i]]->equivalent_diameter());
       g.position = pos[i];
       g.orientation = random_orientation(rng, dim);
       g.material = material;

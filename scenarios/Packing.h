@@ -33,7 +33,7 @@ struct SettleSettings {
   double stress = 10e3;       // Pa pushed by the platen while settling
   long max_steps = 20000;
   double dt = 0;              // s; 0 = the scenario's first time step
-  double tolerance = 1e-4;    // platen travel per check window relative to mean diameter
+  double tolerance = 1e-3;    // platen travel per check window relative to mean diameter
   long window = 200;          // steps between checks
 };
 

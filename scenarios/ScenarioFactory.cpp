@@ -126,8 +126,10 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
 
   LoadingSettings ls;
   Config lc = root.child("loading");
-  ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate"});
-  if (ls.mode == "stress_ramp") {
+  ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate", "none"});
+  if (ls.mode == "none") {
+    ls.duration = lc.number("duration", 0.0, 0.0);
+  } else if (ls.mode == "stress_ramp") {
     ls.max_stress = lc.positive("max_stress", 1e6);
     ls.ramp_time = lc.positive("ramp_time", 0.1);
     ls.hold_time = lc.number("hold_time", 0.0, 0.0);
@@ -138,6 +140,8 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   ls.stop_stress = lc.number("stop_stress", 0.0, 0.0);
   ls.stop_force = lc.number("stop_force", 0.0, 0.0);
   ls.stop_strain = lc.number("stop_strain", 0.0, 0.0, 1.0);
+  if (ls.mode == "none" && ls.duration == 0 && ss.max_steps == 0)
+    lc.fail("mode", "loading mode 'none' needs loading.duration or simulation.max_steps");
   if (ls.mode == "strain_rate" && ls.stop_stress == 0 && ls.stop_force == 0 && ls.stop_strain == 0 &&
       ss.max_steps == 0 && ss.stop_after_breakage_events == 0)
     lc.fail("mode", "strain_rate loading needs a stop: stop_stress, stop_force, stop_strain, "
