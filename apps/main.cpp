@@ -41,7 +41,9 @@ Scenario load(const std::string& file, const std::vector<std::string>& sets, std
   opt.threads = threads;
   opt.source_name = file;
   Json doc = load_scenario_file(file);
-  return build_scenario(std::move(doc), opt);
+  Scenario sc = build_scenario(std::move(doc), opt);
+  for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
+  return sc;
 }
 
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,

@@ -57,6 +57,11 @@ void Config::fail(const std::string& key, const std::string& msg) const {
 
 void Config::mark(const std::string& key) const { st_->read[path_].insert(key); }
 
+std::set<std::string> Config::read_keys() const {
+  auto it = st_->read.find(path_);
+  return it == st_->read.end() ? std::set<std::string>{} : it->second;
+}
+
 bool Config::has(const std::string& key) const {
   mark(key);
   return node_->contains(key) && !(*node_)[key].is_null();

@@ -67,6 +67,10 @@ class Config {
   // The raw JSON at key (for components that take free-form data); marks it read whole.
   const nlohmann::json& raw(const std::string& key) const;
 
+  // Keys of this object read so far; mark a key as read without using it.
+  std::set<std::string> read_keys() const;
+  void accept(const std::string& key) const { mark(key); }
+
   // Throw ConfigError at `path()/key`.
   [[noreturn]] void fail(const std::string& key, const std::string& msg) const;
 

@@ -106,10 +106,10 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     Config st = pc.child("settle");
     spec.settle = st.boolean("enabled", true);
     spec.settle_settings.stress = st.number("stress", 10e3, 0.0);
-    spec.settle_settings.max_steps = st.integer("max_steps", 20000, 1);
+    spec.settle_settings.max_time = st.positive("max_time", 0.5);
     spec.settle_settings.dt = st.number("dt", 0.0, 0.0);
     spec.settle_settings.tolerance = st.positive("tolerance", 1e-3);
-    spec.settle_settings.window = st.integer("window", 200, 1);
+    spec.settle_settings.window = st.positive("window", 0.01);
 
     const auto diam = mono > 0 ? std::vector<double>(static_cast<std::size_t>(count), mono)
                                : sample_psd(psd, static_cast<std::size_t>(count), rng);
@@ -250,11 +250,13 @@ long build_packing(Simulation& sim, const PackingSpec& spec) {
   dmean /= std::max<std::size_t>(1, sim.grains().size());
   double last = e.platen_position();
   long steps = 0;
+  const long window = std::max(1L, std::lround(ss.window / dt));
+  const long max_steps = std::max(window, std::lround(ss.max_time / dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
-  while (steps < ss.max_steps) {
+  while (steps < max_steps) {
     e.step(dt);
     ++steps;
-    if (steps % ss.window == 0) {
+    if (steps % window == 0) {
       const double z = e.platen_position();
       if (!std::isfinite(z)) throw std::runtime_error("packing settlement became non-finite");
       const bool loaded = e.platen_force() > 0.5 * ss.stress * area;

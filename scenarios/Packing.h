@@ -29,12 +29,14 @@ struct PlacedGrain {
   int material = 0;
 };
 
+// Settling is measured in simulated time so that engines with very different time steps
+// (Bullet's 8e-5 s, an explicit DEM's 1e-6 s) settle the same physical way.
 struct SettleSettings {
   double stress = 10e3;       // Pa pushed by the platen while settling
-  long max_steps = 20000;
-  double dt = 0;              // s; 0 = the scenario's first time step
-  double tolerance = 1e-3;    // platen travel per check window relative to mean diameter
-  long window = 200;          // steps between checks
+  double max_time = 0.5;      // s of simulated time at most
+  double dt = 0;              // s; 0 = the scenario's first time step (capped by the engine's bound)
+  double tolerance = 1e-3;    // platen travel per window, relative to the mean diameter
+  double window = 0.01;       // s between checks
 };
 
 struct PackingSpec {

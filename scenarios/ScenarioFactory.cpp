@@ -1,6 +1,7 @@
 #include "scenarios/ScenarioFactory.h"
 
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "scenarios/Registry.h"
@@ -59,6 +60,35 @@ std::vector<TimeStepRule> time_steps_from(const Config& root) {
   return rules;
 }
 
+// A scenario switched to another implementation with `--set engine.type=lsdem` still
+// carries the options of the one it was written for. Keys that another registered
+// implementation of the same seam reads are accepted (with a note on stderr); keys that no
+// implementation reads remain errors, so typos are still caught.
+template <class T>
+void accept_sibling_options(const Config& section, const T& table, const std::string& active,
+                            const EngineContext& ctx, std::vector<std::string>& notes) {
+  const std::set<std::string> used = section.read_keys();
+  for (const auto& e : table.entries()) {
+    if (e.name == active) continue;
+    nlohmann::json copy = section.doc();
+    copy["type"] = e.name;
+    std::set<std::string> keys;
+    try {
+      Config tmp(copy);
+      e.make(tmp, ctx);
+      keys = tmp.read_keys();
+    } catch (const std::exception&) {
+      // Invalid for that implementation: its keys are not learnt, the real check decides.
+      continue;
+    }
+    for (auto it = section.doc().begin(); it != section.doc().end(); ++it)
+      if (!used.count(it.key()) && keys.count(it.key())) {
+        section.accept(it.key());
+        notes.push_back(section.path() + "/" + it.key() + " is an option of '" + e.name + "', ignored by '" + active + "'");
+      }
+  }
+}
+
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
@@ -110,6 +140,9 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   }
   auto engine = eentry.make(ec, ctx);
   auto model = bentry.make(bc, ctx);
+  accept_sibling_options(ec, engines(), et, ctx, sc.notes);
+  accept_sibling_options(bc, breakage_models(), bt, ctx, sc.notes);
+  if (builder) accept_sibling_options(root.child("fragments"), fragment_builders(), ft, ctx, sc.notes);
   sc.engine_name = et;
   sc.breakage_name = bt;
   sc.fragments_name = ft;

@@ -27,6 +27,7 @@ struct Scenario {
   std::uint64_t seed = 1;
   int threads = 1;
   std::string engine_name, breakage_name, fragments_name;
+  std::vector<std::string> notes;  // options accepted but not used (see build_scenario)
 };
 
 struct BuildOptions {

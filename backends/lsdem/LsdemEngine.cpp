@@ -207,9 +207,11 @@ void LsdemEngine::add_grain(const Grain& g) {
   b.sd->users++;
   b.material = g.material;
   const double rho = ctx_.materials[g.material].density;
-  b.m = rho * g.shape->volume();
+  // Density scaling for quasi-static runs (seeds/000 §5 scales masses by 70): mass and
+  // inertia grow, the weight does not (gravity acts on the unscaled mass).
+  b.m = rho * g.shape->volume() * s_.mass_scale;
   b.im = 1.0 / b.m;
-  b.Ib = g.shape->mass_properties().inertia * rho;
+  b.Ib = g.shape->mass_properties().inertia * (rho * s_.mass_scale);
   b.x = g.position;
   b.v = g.velocity;
   b.w = g.angular_velocity;
@@ -695,7 +697,7 @@ void LsdemEngine::compute_forces(double dt) {
 
   // Reduction in the fixed item order.
   for (auto& b : bodies_) {
-    b.f = ctx_.gravity * b.m;
+    b.f = ctx_.gravity * (b.m / s_.mass_scale);
     b.t = {};
     if (s_.global_damping > 0) {
       b.f -= b.v * (s_.global_damping * b.m);
@@ -799,7 +801,7 @@ void LsdemEngine::integrate(double dt) {
     if (platen_cmd_.mode == PlatenCommand::Mode::Velocity) {
       platen_vel_ = platen_cmd_.value;
     } else {
-      double M = container_.platen_mass;
+      double M = container_.platen_mass * s_.mass_scale;
       if (!(M > 0)) {
         M = 0;
         for (const auto& b : bodies_) M += b.m;
@@ -827,6 +829,7 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
   s.global_damping = cfg.number("global_damping", s.global_damping, 0);
   s.dt_safety = cfg.number("dt_safety", s.dt_safety, 1e-6, 2);
   s.hertz_reference_overlap = cfg.number("hertz_reference_overlap", s.hertz_reference_overlap, 1e-9, 0.5);
+  s.mass_scale = cfg.positive("mass_scale", s.mass_scale);
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
     cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");

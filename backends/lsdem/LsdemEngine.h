@@ -65,6 +65,7 @@ struct LsdemSettings {
   double global_damping = 0;            // C_g, 1/s (seeds/004 Tables 1–2)
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
+  double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged
   int threads = 1;
 };
 
@@ -197,7 +198,7 @@ class LsdemEngine final : public Engine {
 
 // Factory for the registry: cfg is the scenario's "engine" object. Keys (defaults):
 // contact_law "linear" | "hertz", kn 4e7 N/m, ks_ratio 0.6, wall_kn 0 (= kn),
-// damping_ratio 0.4, global_damping 0 1/s, dt_safety 0.1, hertz_reference_overlap 0.01.
+// damping_ratio 0.4, global_damping 0 1/s, dt_safety 0.1, hertz_reference_overlap 0.01, mass_scale 1.
 std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx);
 
 // The speed benchmark's scene (after YADE's examples/levelSet/discharge.py): `grains`

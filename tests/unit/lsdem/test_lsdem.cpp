@@ -187,6 +187,27 @@ TEST(Lsdem, SphereAtRestCarriesItsWeight) {
   EXPECT_NEAR(e.contacts()[0].point.z, 0.0, 0.01);
 }
 
+TEST(Lsdem, MassScalingKeepsTheWeightAndLengthensTheStep) {
+  // seeds/000 §5 density scaling: inertia ×70, weight unchanged, stable step ×√70.
+  LsdemSettings s;
+  s.kn = 1e7;
+  s.damping_ratio = 0.7;
+  s.global_damping = 1;
+  auto ctx = context(3, {0, 0, -9.81});
+  LsdemEngine plain(s, ctx);
+  s.mass_scale = 70;
+  LsdemEngine e(s, ctx);
+  const auto sh = sphere(1.0, 0.05, 4000);
+  for (LsdemEngine* x : {&plain, &e}) {
+    x->set_container({});
+    x->add_grain(grain(0, sh, {0, 0, 1.0}));
+  }
+  EXPECT_NEAR(e.max_stable_dt() / plain.max_stable_dt(), std::sqrt(70.0), 1e-9);
+  for (int i = 0; i < 4000; ++i) e.step(e.max_stable_dt());
+  const double mg = 1000 * 4 * kPi / 3 * 9.81;
+  EXPECT_NEAR(e.floor_force() / mg, 1.0, 0.01);
+}
+
 TEST(Lsdem, DiskAtRestCarriesItsWeight2D) {
   LsdemSettings s;
   s.kn = 1e8;
