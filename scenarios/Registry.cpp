@@ -3,6 +3,7 @@
 #include "crumble_config.h"
 
 #include "breakage/none/NoBreakage.h"
+#include "breakage/peridynamics/Peridynamics.h"
 
 namespace crumble {
 
@@ -48,6 +49,7 @@ Table<ModelFactory>& breakage_models() {
     Table<ModelFactory> t("breakage model");
     t.add({"none", "grains never break (rigid runs)",
            [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}});
+    t.add({"peridynamics", "LPS peridynamics with critical-stretch bonds (Zhu & Zhao 2019)", make_peridynamics, {}, {3}});
     return t;
   }();
   return t;
