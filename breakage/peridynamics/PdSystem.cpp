@@ -354,15 +354,18 @@ double PdSystem::displacement(std::int32_t i, int axis) const {
   return pos_[4 * static_cast<std::size_t>(i) + std::clamp(axis, 0, 2)] - ref;
 }
 
-Mat3 PdSystem::partial_stress(std::int32_t i) const {
-  // θ_i from the current positions (eq. 4), then Σ_j w V t_ij M ⊗ ξ.
+double PdSystem::dilatation(std::int32_t i) const {
   double acc = 0;
   for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
-    const std::int32_t j = L_.neighbours[q];
-    const Vec3 Y = current(j) - current(i);
+    const Vec3 Y = current(L_.neighbours[q]) - current(i);
     acc += alive_[q] * L_.length[q] * (norm(Y) - L_.length[q]);
   }
-  const double ati = a_[i] * g_[i] * acc;
+  return g_[i] * acc;
+}
+
+Mat3 PdSystem::partial_stress(std::int32_t i) const {
+  // θ_i from the current positions (eq. 4), then Σ_j w V t_ij M ⊗ ξ.
+  const double ati = a_[i] * dilatation(i);
   Mat3 s = Mat3::zero();
   for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
     const std::int32_t j = L_.neighbours[q];

@@ -74,8 +74,8 @@ class PdSystem {
       pos_[4 * i + 2] = L_.points[i].z + d.z;
     }
   }
-  // Dilation θ_i (seeds/000 eq. 4) of the last compute_forces().
-  double dilatation(std::int32_t i) const { return a_[i] != 0 ? pos_[4 * i + 3] / a_[i] : 0.0; }
+  // Dilation θ_i (seeds/000 eq. 4) from the current positions.
+  double dilatation(std::int32_t i) const;
   Vec3 current(std::int32_t i) const { return {pos_[4 * i], pos_[4 * i + 1], pos_[4 * i + 2]}; }
   // Partial stress Σ_j t_ij M_ij ⊗ ξ_ij V_j at point i (equals the Cauchy stress for a
   // homogeneous deformation in the bulk), from the current positions.

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "breakage/peridynamics/PdClusters.h"
+#include "breakage/peridynamics/PdKernel.h"
 #include "breakage/peridynamics/PdLattice.h"
 #include "breakage/peridynamics/PdSystem.h"
 #include "core/Weibull.h"
@@ -76,12 +77,6 @@ std::int32_t nearest_point(const Lattice& L, const Vec3& p, double* dist) {
 // static stretches stay below preload_fraction·s_c at the full load ends there (intact).
 RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double c_p, const PdOptions& o) {
   RunResult r;
-  const double dt = o.dt_safety * (o.dt_rule == "spectral" ? sys.spectral_dt(40, o.threads) : sys.stable_dt());
-  r.dt = dt;
-  // c_p: P-wave speed (with the analysis' density); sets the damping frequency and hold time.
-  const double transit = d_e / c_p;
-  const double damping = 2.0 * o.damping_ratio * kPi * c_p / d_e;
-  const long check = std::max<long>(1, o.check_interval);
   double t0 = 0;
   if (o.elastic_preload) {
     int iterations = 0;
@@ -97,6 +92,12 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
     sys.set_state(u1, lambda0, ramp);
     t0 = lambda0 / ramp;
   }
+  const double dt = o.dt_safety * (o.dt_rule == "spectral" ? sys.spectral_dt(40, o.threads) : sys.stable_dt());
+  r.dt = dt;
+  // c_p: P-wave speed (with the analysis' density); sets the damping frequency and hold time.
+  const double transit = d_e / c_p;
+  const double damping = 2.0 * o.damping_ratio * kPi * c_p / d_e;
+  const long check = std::max<long>(1, o.check_interval);
   long broken_seen = 0;
   double t_full = -1;  // time the full load was reached
   const pd::Lattice& L = sys.lattice();
@@ -420,7 +421,7 @@ std::string pd_kernel_bench(long steps, int threads) {
   std::ostringstream os;
   os.precision(6);
   os << "{\"points\":" << L.size() << ",\"bonds\":" << L.bonds() << ",\"steps\":" << steps
-     << ",\"threads\":" << threads << ",\"wall_seconds\":" << wall
+     << ",\"threads\":" << threads << ",\"isa\":\"" << pd::kernel::isa() << "\",\"wall_seconds\":" << wall
      << ",\"bond_visits_per_second\":" << static_cast<double>(L.bonds()) * steps / wall
      << ",\"broken_bonds\":" << sys.broken_bonds() << "}";
   return os.str();

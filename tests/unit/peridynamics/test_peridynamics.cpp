@@ -436,6 +436,49 @@ TEST(PeridynamicsModel, AnalyseSplitsOrKeepsAGrain) {
   EXPECT_FALSE(low.fracture.has_value());
 }
 
+// analyse() is const and runs for several grains at once (one grain per OpenMP thread, as
+// in Simulation::check_breakage): the same results as one after the other.
+TEST(PeridynamicsModel, ConcurrentAnalysesMatchSerial) {
+  PdOptions o;
+  o.spacing_fraction = 0.1;
+  const PeridynamicsModel model{o};
+  const int n = 4;
+  std::vector<Grain> grains;
+  std::vector<std::vector<Contact>> contacts(n);
+  for (int k = 0; k < n; ++k) {
+    Grain g = sphere_grain(1e-3 * (1.0 - 0.1 * k), 30.0);
+    g.id = k;
+    g.orientation = Quat::from_axis_angle({1, 2, 3}, 0.4 * k);
+    const double F = 60.0 + 60.0 * k;  // the first stays intact
+    Contact a, b;
+    a.a = b.a = g.id;
+    a.point = g.position + Vec3{0, 0, g.shape->bounds().hi.z};
+    b.point = g.position - Vec3{0, 0, g.shape->bounds().hi.z};
+    a.force = {0, 0, -F};
+    b.force = {0, 0, F};
+    contacts[k] = {a, b};
+    grains.push_back(g);
+  }
+  std::vector<Analysis> serial(n), parallel(n);
+  for (int k = 0; k < n; ++k) serial[k] = model.analyse(grains[k], table1(), contacts[k]);
+#pragma omp parallel for num_threads(2) schedule(dynamic, 1)
+  for (int k = 0; k < n; ++k) parallel[k] = model.analyse(grains[k], table1(), contacts[k]);
+  int broken = 0;
+  for (int k = 0; k < n; ++k) {
+    EXPECT_EQ(serial[k].outcome, parallel[k].outcome);
+    EXPECT_EQ(serial[k].criterion, parallel[k].criterion);
+    EXPECT_EQ(serial[k].steps, parallel[k].steps);
+    ASSERT_EQ(serial[k].fracture.has_value(), parallel[k].fracture.has_value());
+    if (serial[k].fracture) {
+      EXPECT_EQ(std::get<PointClusters>(*serial[k].fracture).cluster,
+                std::get<PointClusters>(*parallel[k].fracture).cluster);
+    }
+    broken += serial[k].broken;
+  }
+  EXPECT_FALSE(serial[0].broken);
+  EXPECT_GE(broken, 2);
+}
+
 TEST(PeridynamicsModel, BadInputsGiveOutcomesOrErrors) {
   const PeridynamicsModel model{PdOptions{}};
   Grain g = sphere_grain(1e-3, 30.0);
