@@ -13,6 +13,13 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
+// The bond helpers below must be inlined into every clone to be compiled for its ISA.
+#if defined(__GNUC__)
+#define CRUMBLE_PD_INLINE inline __attribute__((always_inline))
+#else
+#define CRUMBLE_PD_INLINE inline
+#endif
+
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define CRUMBLE_PD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
@@ -21,6 +28,56 @@
 
 namespace crumble::pd::kernel {
 
+// One bond, shared by the portable loops and the scalar tails of the AVX-512 ones.
+struct Bond {
+  double dx, dy, dz, l;
+};
+CRUMBLE_PD_INLINE Bond bond(const double* pos, std::int32_t j, double xi, double yi, double zi) {
+  const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
+  return {dx, dy, dz, std::sqrt(dx * dx + dy * dy + dz * dz)};
+}
+// Critical stretch (seeds/000 §2.1): a bond stretched beyond sc is broken for good.
+CRUMBLE_PD_INLINE double keep(double e, double r, double sc, double alive) { return e <= sc * r ? alive : 0.0; }
+// Pass-2 bond scale: alive [(a_i θ_i + a_j θ_j) r + kb e] / |Y| (|Y| bounded away from 0).
+CRUMBLE_PD_INLINE double force_scale(double alive, double ati, double atj, double r, double kb, double l) {
+  return alive * ((ati + atj) * r + kb * (l - r)) / std::max(l, 1e-3 * r);
+}
+
+// Bonds [q, q1) of point i (position xi, yi, zi): pass 1 returns Σ alive r e after the
+// breakage check; pass 2 adds Σ scale·Y to s[0..2].
+CRUMBLE_PD_INLINE double dilatation_bonds(std::int32_t q, std::int32_t q1, const std::int32_t* __restrict nbr,
+                               const double* __restrict len, double* __restrict alive, const double* __restrict pos,
+                               double xi, double yi, double zi, double sc) {
+  double acc = 0;
+#pragma omp simd reduction(+ : acc)
+  for (std::int32_t k = q; k < q1; ++k) {
+    const double r = len[k];
+    const double e = bond(pos, nbr[k], xi, yi, zi).l - r;
+    const double w = keep(e, r, sc, alive[k]);
+    alive[k] = w;
+    acc += w * r * e;
+  }
+  return acc;
+}
+
+CRUMBLE_PD_INLINE void force_bonds(std::int32_t q, std::int32_t q1, const std::int32_t* __restrict nbr,
+                        const double* __restrict len, const double* __restrict alive, const double* __restrict kb,
+                        const double* __restrict pos, double xi, double yi, double zi, double ati, double* s) {
+  double sx = 0, sy = 0, sz = 0;
+#pragma omp simd reduction(+ : sx, sy, sz)
+  for (std::int32_t k = q; k < q1; ++k) {
+    const std::int32_t j = nbr[k];
+    const Bond y = bond(pos, j, xi, yi, zi);
+    const double f = force_scale(alive[k], ati, pos[4 * j + 3], len[k], kb[k], y.l);
+    sx += f * y.dx;
+    sy += f * y.dy;
+    sz += f * y.dz;
+  }
+  s[0] += sx;
+  s[1] += sy;
+  s[2] += sz;
+}
+
 // ---- portable versions (auto-vectorised; AVX2 and baseline clones) ----
 
 CRUMBLE_PD_CLONES
@@ -28,19 +85,8 @@ void dilatation_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* _
                         const std::int32_t* __restrict nbr, const double* __restrict len, double* __restrict alive,
                         double* __restrict pos, const double* __restrict g, const double* __restrict a, double sc) {
   for (std::int32_t i = i0; i < i1; ++i) {
-    const double xi = pos[4 * i], yi = pos[4 * i + 1], zi = pos[4 * i + 2];
-    double acc = 0;
-    const std::int32_t q1 = off[i + 1];
-#pragma omp simd reduction(+ : acc)
-    for (std::int32_t q = off[i]; q < q1; ++q) {
-      const std::int32_t j = nbr[q];
-      const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
-      const double r = len[q];
-      const double e = std::sqrt(dx * dx + dy * dy + dz * dz) - r;
-      const double w = e <= sc * r ? alive[q] : 0.0;  // critical stretch: broken for good
-      alive[q] = w;
-      acc += w * r * e;
-    }
+    const double acc = dilatation_bonds(off[i], off[i + 1], nbr, len, alive, pos, pos[4 * i], pos[4 * i + 1],
+                                        pos[4 * i + 2], sc);
     pos[4 * i + 3] = a[i] * g[i] * acc;
   }
 }
@@ -51,24 +97,12 @@ void force_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* __rest
                    const double* __restrict kb, const double* __restrict pos, double* __restrict fx,
                    double* __restrict fy, double* __restrict fz) {
   for (std::int32_t i = i0; i < i1; ++i) {
-    const double xi = pos[4 * i], yi = pos[4 * i + 1], zi = pos[4 * i + 2], ati = pos[4 * i + 3];
-    double sx = 0, sy = 0, sz = 0;
-    const std::int32_t q1 = off[i + 1];
-#pragma omp simd reduction(+ : sx, sy, sz)
-    for (std::int32_t q = off[i]; q < q1; ++q) {
-      const std::int32_t j = nbr[q];
-      const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
-      const double r = len[q];
-      const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double e = l - r;
-      const double s = alive[q] * ((ati + pos[4 * j + 3]) * r + kb[q] * e) / std::max(l, 1e-3 * r);
-      sx += s * dx;
-      sy += s * dy;
-      sz += s * dz;
-    }
-    fx[i] = sx;
-    fy[i] = sy;
-    fz[i] = sz;
+    double f[3] = {0, 0, 0};
+    force_bonds(off[i], off[i + 1], nbr, len, alive, kb, pos, pos[4 * i], pos[4 * i + 1], pos[4 * i + 2],
+                pos[4 * i + 3], f);
+    fx[i] = f[0];
+    fy[i] = f[1];
+    fz[i] = f[2];
   }
 }
 
@@ -101,6 +135,28 @@ __attribute__((target("avx512f"))) inline void load8(const double* pos, const st
   W = _mm512_permutex2var_pd(t1, hi, t3);
 }
 
+// Eight bonds of one point: Y = x_j − x_i, |Y|, reference length r, extension e = |Y| − r,
+// and the neighbours' aθ.
+struct Bond8 {
+  __m512d dx, dy, dz, l, r, e, at;
+};
+__attribute__((target("avx512f"), always_inline)) inline Bond8 bond8(const double* pos, const std::int32_t* j,
+                                                                      const double* len, __m512d vx, __m512d vy,
+                                                                      __m512d vz) {
+  __m512d X, Y, Z, W;
+  load8(pos, j, X, Y, Z, W);
+  Bond8 b;
+  b.dx = _mm512_sub_pd(X, vx);
+  b.dy = _mm512_sub_pd(Y, vy);
+  b.dz = _mm512_sub_pd(Z, vz);
+  b.l = _mm512_sqrt_pd(
+      _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(b.dx, b.dx), _mm512_mul_pd(b.dy, b.dy)), _mm512_mul_pd(b.dz, b.dz)));
+  b.r = _mm512_loadu_pd(len);
+  b.e = _mm512_sub_pd(b.l, b.r);
+  b.at = W;
+  return b;
+}
+
 __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::int32_t i1,
                                                           const std::int32_t* __restrict off,
                                                           const std::int32_t* __restrict nbr,
@@ -115,28 +171,13 @@ __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::
     std::int32_t q = off[i];
     const std::int32_t q1 = off[i + 1];
     for (; q + 8 <= q1; q += 8) {
-      __m512d X, Y, Z, W;
-      load8(pos, nbr + q, X, Y, Z, W);
-      const __m512d dx = _mm512_sub_pd(X, vx), dy = _mm512_sub_pd(Y, vy), dz = _mm512_sub_pd(Z, vz);
-      const __m512d l = _mm512_sqrt_pd(
-          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-      const __m512d r = _mm512_loadu_pd(len + q);
-      const __m512d e = _mm512_sub_pd(l, r);
-      const __mmask8 ok = _mm512_cmp_pd_mask(e, _mm512_mul_pd(vsc, r), _CMP_LE_OQ);
+      const Bond8 b = bond8(pos, nbr + q, len + q, vx, vy, vz);
+      const __mmask8 ok = _mm512_cmp_pd_mask(b.e, _mm512_mul_pd(vsc, b.r), _CMP_LE_OQ);
       const __m512d w = _mm512_maskz_loadu_pd(ok, alive + q);
       _mm512_storeu_pd(alive + q, w);
-      vacc = _mm512_add_pd(vacc, _mm512_mul_pd(_mm512_mul_pd(w, r), e));
+      vacc = _mm512_add_pd(vacc, _mm512_mul_pd(_mm512_mul_pd(w, b.r), b.e));
     }
-    double acc = _mm512_reduce_add_pd(vacc);
-    for (; q < q1; ++q) {
-      const std::int32_t j = nbr[q];
-      const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
-      const double r = len[q];
-      const double e = std::sqrt(dx * dx + dy * dy + dz * dz) - r;
-      const double w = e <= sc * r ? alive[q] : 0.0;
-      alive[q] = w;
-      acc += w * r * e;
-    }
+    const double acc = _mm512_reduce_add_pd(vacc) + dilatation_bonds(q, q1, nbr, len, alive, pos, xi, yi, zi, sc);
     pos[4 * i + 3] = a[i] * g[i] * acc;
   }
 }
@@ -156,35 +197,20 @@ __attribute__((target("avx512f"))) void force_avx512(std::int32_t i0, std::int32
     std::int32_t q = off[i];
     const std::int32_t q1 = off[i + 1];
     for (; q + 8 <= q1; q += 8) {
-      __m512d X, Y, Z, W;
-      load8(pos, nbr + q, X, Y, Z, W);
-      const __m512d dx = _mm512_sub_pd(X, vx), dy = _mm512_sub_pd(Y, vy), dz = _mm512_sub_pd(Z, vz);
-      const __m512d l = _mm512_sqrt_pd(
-          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
-      const __m512d r = _mm512_loadu_pd(len + q);
-      const __m512d e = _mm512_sub_pd(l, r);
-      const __m512d t = _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(vat, W), r), _mm512_mul_pd(_mm512_loadu_pd(kb + q), e));
+      const Bond8 b = bond8(pos, nbr + q, len + q, vx, vy, vz);
+      const __m512d t =
+          _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(vat, b.at), b.r), _mm512_mul_pd(_mm512_loadu_pd(kb + q), b.e));
       const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_loadu_pd(alive + q), t),
-                                      _mm512_max_pd(l, _mm512_mul_pd(tiny, r)));
-      ax = _mm512_add_pd(ax, _mm512_mul_pd(s, dx));
-      ay = _mm512_add_pd(ay, _mm512_mul_pd(s, dy));
-      az = _mm512_add_pd(az, _mm512_mul_pd(s, dz));
+                                      _mm512_max_pd(b.l, _mm512_mul_pd(tiny, b.r)));
+      ax = _mm512_add_pd(ax, _mm512_mul_pd(s, b.dx));
+      ay = _mm512_add_pd(ay, _mm512_mul_pd(s, b.dy));
+      az = _mm512_add_pd(az, _mm512_mul_pd(s, b.dz));
     }
-    double sx = _mm512_reduce_add_pd(ax), sy = _mm512_reduce_add_pd(ay), sz = _mm512_reduce_add_pd(az);
-    for (; q < q1; ++q) {
-      const std::int32_t j = nbr[q];
-      const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
-      const double r = len[q];
-      const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double e = l - r;
-      const double s = alive[q] * ((ati + pos[4 * j + 3]) * r + kb[q] * e) / std::max(l, 1e-3 * r);
-      sx += s * dx;
-      sy += s * dy;
-      sz += s * dz;
-    }
-    fx[i] = sx;
-    fy[i] = sy;
-    fz[i] = sz;
+    double f[3] = {_mm512_reduce_add_pd(ax), _mm512_reduce_add_pd(ay), _mm512_reduce_add_pd(az)};
+    force_bonds(q, q1, nbr, len, alive, kb, pos, xi, yi, zi, ati, f);
+    fx[i] = f[0];
+    fy[i] = f[1];
+    fz[i] = f[2];
   }
 }
 

@@ -51,19 +51,8 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
     pos_[4 * i + 1] = ry_[i];
     pos_[4 * i + 2] = rz_[i];
   }
-  vx_.assign(n, 0);
-  vy_.assign(n, 0);
-  vz_.assign(n, 0);
-  fx_.assign(n, 0);
-  fy_.assign(n, 0);
-  fz_.assign(n, 0);
-  bx_.assign(n, 0);
-  by_.assign(n, 0);
-  bz_.assign(n, 0);
+  for (auto* v : {&vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &bx_, &by_, &bz_, &g_, &a_, &b_}) v->assign(n, 0.0);
   free_.assign(n, 1.0);
-  g_.assign(n, 0);
-  a_.assign(n, 0);
-  b_.assign(n, 0);
   alive_ = L_.weight;
   for (std::size_t i = 0; i < n; ++i) {
     // seeds/000 eq. 3: weighted volume m = Σ ω |ξ|² V_j (ω = 1; V_j with its partial-volume weight)

@@ -32,6 +32,15 @@ Material table1() {  // seeds/000 Table 1
   return m;
 }
 
+// Lattice points of a cube of (2·half + 1)³ points centred at the origin.
+Lattice cube_lattice(int half, double h, bool partial_volumes) {
+  std::vector<Vec3> pts;
+  for (int k = -half; k <= half; ++k)
+    for (int j = -half; j <= half; ++j)
+      for (int i = -half; i <= half; ++i) pts.push_back(Vec3(i, j, k) * h);
+  return pd::build_lattice(pts, h, 3.0002, partial_volumes);
+}
+
 double volume_sum(const CrushResult& r) { return std::accumulate(r.fragment_volumes.begin(), r.fragment_volumes.end(), 0.0); }
 
 // ------------------------------------------------------------------ crushing (§4.2, Fig. 9)
@@ -122,12 +131,7 @@ struct Cubic {
 };
 
 Cubic bulk_constants(bool partial_volumes, const LpsMaterial& mat) {
-  const double h = 1e-4;
-  std::vector<Vec3> pts;
-  for (int k = -6; k <= 6; ++k)
-    for (int j = -6; j <= 6; ++j)
-      for (int i = -6; i <= 6; ++i) pts.push_back(Vec3(i, j, k) * h);
-  const Lattice L = pd::build_lattice(pts, h, 3.0002, partial_volumes);
+  const Lattice L = cube_lattice(6, 1e-4, partial_volumes);
   PdSystem sys(L, mat, 1.0);
   std::int32_t c = 0;
   for (std::size_t i = 0; i < L.size(); ++i)
@@ -225,11 +229,7 @@ TEST(PeridynamicsElastic, BarModulusConvergesAtFirstOrder) {
 TEST(PeridynamicsElastic, AffineFieldIsInEquilibriumInTheBulk) {
   for (bool pv : {false, true}) {
     const double h = 1e-4;
-    std::vector<Vec3> pts;
-    for (int k = -5; k <= 5; ++k)
-      for (int j = -5; j <= 5; ++j)
-        for (int i = -5; i <= 5; ++i) pts.push_back(Vec3(i, j, k) * h);
-    const Lattice L = pd::build_lattice(pts, h, 3.0002, pv);
+    const Lattice L = cube_lattice(5, h, pv);
     PdSystem sys(L, LpsMaterial::from_young(100e9, 0.15, 2650), 1.0);
     const double eps = 1e-5;
     sys.set_displacement([&](const Vec3& p) { return Vec3{eps * p.x + 0.3 * eps * p.y, -0.2 * eps * p.y, 0.5 * eps * p.z}; });
