@@ -2,6 +2,7 @@
 // closed forms, conservation, strength sampling, bad inputs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -289,16 +290,58 @@ TEST(PeridynamicsKernel, VariantsAndThreadsAgree) {
   for (std::size_t k = 0; k < f1.size(); ++k) EXPECT_NEAR(f1[k], f2[k], 1e-12 * fmax);
   std::printf("kernel isa: %s\n", pd::kernel::isa());
 
-  // threads: a full crush is bitwise the same on 1 and 2 threads
-  PdOptions o;
-  o.spacing_fraction = 0.1;
-  const CrushResult r1 = crush_single_grain(*s, table1(), 30.0, o);
-  o.threads = 2;
-  const CrushResult r2 = crush_single_grain(*s, table1(), 30.0, o);
-  EXPECT_EQ(r1.force, r2.force);
-  EXPECT_EQ(r1.steps, r2.steps);
-  EXPECT_EQ(r1.broken_bonds, r2.broken_bonds);
-  EXPECT_EQ(r1.clusters.cluster, r2.clusters.cluster);
+  // threads: splitting the rows between 2 threads changes no bit (forces, broken bonds)
+  const auto mat = LpsMaterial::from_young(100e9, 0.15, 2650);
+  PdSystem s1(L, mat, 5e-4), s2(L, mat, 5e-4);
+  auto field = [&](const Vec3& p) { return Vec3{std::sin(4e3 * p.y), std::cos(3e3 * p.z), std::sin(5e3 * p.x)} * 2e-7; };
+  s1.set_displacement(field);
+  s2.set_displacement(field);
+  s1.compute_forces(1);
+  s2.compute_forces(2);
+  EXPECT_EQ(s1.alive(), s2.alive());
+  EXPECT_GT(s1.broken_bonds(), 0);
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(n); ++i) {
+    EXPECT_EQ(s1.force_density(i).x, s2.force_density(i).x);
+    EXPECT_EQ(s1.force_density(i).y, s2.force_density(i).y);
+    EXPECT_EQ(s1.force_density(i).z, s2.force_density(i).z);
+  }
+}
+
+// Each bond is stored at both ends; both copies must break at the same step (the force
+// pair stays equal and opposite). A sphere loaded far past its strength, every step.
+TEST(PeridynamicsKernel, BondsBreakAtBothEndsTogether) {
+  const auto s = Shape::sphere(1e-3);
+  const double h = 0.1 * s->equivalent_diameter();
+  const Lattice L = pd::build_lattice(pd::lattice_points(*s, h), h, 3.0002, true);
+  const auto mat = LpsMaterial::from_young(100e9, 0.15, 2650);
+  PdSystem sys(L, mat, pd::critical_stretch(30.0, mat.bulk, mat.shear, L.horizon));
+  std::vector<std::int32_t> top, bottom;
+  for (std::size_t i = 0; i < L.size(); ++i) {
+    if (L.points[i].z > 0.6e-3) top.push_back(static_cast<std::int32_t>(i));
+    if (L.points[i].z < -0.6e-3) bottom.push_back(static_cast<std::int32_t>(i));
+  }
+  sys.fix(bottom);
+  sys.add_load(top, {0, 0, -1.0});
+  const double dt = 0.8 * sys.spectral_dt();
+  std::vector<std::int32_t> rev(L.neighbours.size());
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(L.size()); ++i)
+    for (std::int32_t q = L.offsets[i]; q < L.offsets[i + 1]; ++q) {
+      const std::int32_t j = L.neighbours[q];
+      const auto* b = L.neighbours.data() + L.offsets[j];
+      const auto* e = L.neighbours.data() + L.offsets[j + 1];
+      rev[q] = static_cast<std::int32_t>(std::lower_bound(b, e, i) - L.neighbours.data());
+      ASSERT_EQ(L.neighbours[rev[q]], i);
+    }
+  long checked = 0;
+  for (int n = 0; n < 400; ++n) {
+    sys.step(dt, 4e7 * n * dt, 0.0);  // 4e7 N/s: far past the strength within the run
+    if (n % 5) continue;
+    for (std::size_t q = 0; q < rev.size(); ++q) {
+      ASSERT_EQ(sys.alive()[q], sys.alive()[rev[q]]) << "bond " << q << " step " << n;
+      checked += sys.alive()[q] == 0.0;
+    }
+  }
+  EXPECT_GT(checked, 0);
 }
 
 // The spectral step estimate sits just below the real stability limit: undamped motion
@@ -544,6 +587,24 @@ TEST(PeridynamicsModel, OtherShapesDiscretiseAndCrush) {
     EXPECT_TRUE(r.split) << s->describe();
     EXPECT_NEAR(volume_sum(r), s->volume(), 1e-12 * s->volume());
   }
+}
+
+// The grains of seeds/000 §5 are 42-vertex polyhedra; their lattice needs MeshDistance
+// (implemented on another branch: skipped while this build has the placeholder).
+TEST(PeridynamicsModel, PolyhedralGrainCrushes) {
+  TriMesh m = icosphere(1);
+  m.scale(1e-3);
+  const auto s = Shape::polyhedron(m);
+  try {
+    (void)s->contains({0, 0, 0});
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << "Shape::contains for polyhedra not available: " << e.what();
+  }
+  PdOptions o;
+  o.spacing_fraction = 0.1;
+  const CrushResult r = crush_single_grain(*s, table1(), 30.0, o);
+  EXPECT_TRUE(r.split);
+  EXPECT_NEAR(volume_sum(r), s->volume(), 1e-12 * s->volume());
 }
 
 // ------------------------------------------------------------------ strength (§4)
