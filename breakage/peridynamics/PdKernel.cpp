@@ -135,23 +135,35 @@ __attribute__((target("avx512f"))) inline void load8(const double* pos, const st
   W = _mm512_permutex2var_pd(t1, hi, t3);
 }
 
-// Eight bonds of one point: Y = x_j − x_i, |Y|, reference length r, extension e = |Y| − r,
-// and the neighbours' aθ.
+// Up to eight bonds [q, q1) of one point: Y = x_j − x_i, |Y|, reference length r
+// (0 in lanes past q1), extension e = |Y| − r, the neighbours' aθ, and the lane mask.
+// Lanes past q1 repeat the last neighbour, so |Y| > 0 there too.
 struct Bond8 {
   __m512d dx, dy, dz, l, r, e, at;
+  __mmask8 m;
 };
-__attribute__((target("avx512f"), always_inline)) inline Bond8 bond8(const double* pos, const std::int32_t* j,
-                                                                      const double* len, __m512d vx, __m512d vy,
+__attribute__((target("avx512f"), always_inline)) inline Bond8 bond8(const double* pos, const std::int32_t* nbr,
+                                                                      const double* len, std::int32_t q,
+                                                                      std::int32_t q1, __m512d vx, __m512d vy,
                                                                       __m512d vz) {
+  Bond8 b;
+  const std::int32_t* j = nbr + q;
+  std::int32_t pad[8];
+  if (q1 - q >= 8) {
+    b.m = 0xFF;
+  } else {
+    b.m = static_cast<__mmask8>((1u << (q1 - q)) - 1u);
+    for (int k = 0; k < 8; ++k) pad[k] = nbr[std::min(q + k, q1 - 1)];
+    j = pad;
+  }
   __m512d X, Y, Z, W;
   load8(pos, j, X, Y, Z, W);
-  Bond8 b;
   b.dx = _mm512_sub_pd(X, vx);
   b.dy = _mm512_sub_pd(Y, vy);
   b.dz = _mm512_sub_pd(Z, vz);
   b.l = _mm512_sqrt_pd(
       _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(b.dx, b.dx), _mm512_mul_pd(b.dy, b.dy)), _mm512_mul_pd(b.dz, b.dz)));
-  b.r = _mm512_loadu_pd(len);
+  b.r = _mm512_maskz_loadu_pd(b.m, len + q);
   b.e = _mm512_sub_pd(b.l, b.r);
   b.at = W;
   return b;
@@ -168,17 +180,15 @@ __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::
     const double xi = pos[4 * i], yi = pos[4 * i + 1], zi = pos[4 * i + 2];
     const __m512d vx = _mm512_set1_pd(xi), vy = _mm512_set1_pd(yi), vz = _mm512_set1_pd(zi);
     __m512d vacc = _mm512_setzero_pd();
-    std::int32_t q = off[i];
     const std::int32_t q1 = off[i + 1];
-    for (; q + 8 <= q1; q += 8) {
-      const Bond8 b = bond8(pos, nbr + q, len + q, vx, vy, vz);
-      const __mmask8 ok = _mm512_cmp_pd_mask(b.e, _mm512_mul_pd(vsc, b.r), _CMP_LE_OQ);
+    for (std::int32_t q = off[i]; q < q1; q += 8) {
+      const Bond8 b = bond8(pos, nbr, len, q, q1, vx, vy, vz);
+      const __mmask8 ok = _mm512_mask_cmp_pd_mask(b.m, b.e, _mm512_mul_pd(vsc, b.r), _CMP_LE_OQ);
       const __m512d w = _mm512_maskz_loadu_pd(ok, alive + q);
-      _mm512_storeu_pd(alive + q, w);
+      _mm512_mask_storeu_pd(alive + q, b.m, w);
       vacc = _mm512_add_pd(vacc, _mm512_mul_pd(_mm512_mul_pd(w, b.r), b.e));
     }
-    const double acc = _mm512_reduce_add_pd(vacc) + dilatation_bonds(q, q1, nbr, len, alive, pos, xi, yi, zi, sc);
-    pos[4 * i + 3] = a[i] * g[i] * acc;
+    pos[4 * i + 3] = a[i] * g[i] * _mm512_reduce_add_pd(vacc);
   }
 }
 
@@ -194,23 +204,20 @@ __attribute__((target("avx512f"))) void force_avx512(std::int32_t i0, std::int32
     const __m512d vx = _mm512_set1_pd(xi), vy = _mm512_set1_pd(yi), vz = _mm512_set1_pd(zi),
                   vat = _mm512_set1_pd(ati);
     __m512d ax = _mm512_setzero_pd(), ay = _mm512_setzero_pd(), az = _mm512_setzero_pd();
-    std::int32_t q = off[i];
     const std::int32_t q1 = off[i + 1];
-    for (; q + 8 <= q1; q += 8) {
-      const Bond8 b = bond8(pos, nbr + q, len + q, vx, vy, vz);
-      const __m512d t =
-          _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(vat, b.at), b.r), _mm512_mul_pd(_mm512_loadu_pd(kb + q), b.e));
-      const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_loadu_pd(alive + q), t),
+    for (std::int32_t q = off[i]; q < q1; q += 8) {
+      const Bond8 b = bond8(pos, nbr, len, q, q1, vx, vy, vz);
+      const __m512d t = _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(vat, b.at), b.r),
+                                      _mm512_mul_pd(_mm512_maskz_loadu_pd(b.m, kb + q), b.e));
+      const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(b.m, alive + q), t),
                                       _mm512_max_pd(b.l, _mm512_mul_pd(tiny, b.r)));
       ax = _mm512_add_pd(ax, _mm512_mul_pd(s, b.dx));
       ay = _mm512_add_pd(ay, _mm512_mul_pd(s, b.dy));
       az = _mm512_add_pd(az, _mm512_mul_pd(s, b.dz));
     }
-    double f[3] = {_mm512_reduce_add_pd(ax), _mm512_reduce_add_pd(ay), _mm512_reduce_add_pd(az)};
-    force_bonds(q, q1, nbr, len, alive, kb, pos, xi, yi, zi, ati, f);
-    fx[i] = f[0];
-    fy[i] = f[1];
-    fz[i] = f[2];
+    fx[i] = _mm512_reduce_add_pd(ax);
+    fy[i] = _mm512_reduce_add_pd(ay);
+    fz[i] = _mm512_reduce_add_pd(az);
   }
 }
 
