@@ -69,7 +69,7 @@ struct PdOptions {
   double damping_ratio = 0.0;    // "damping_ratio": ζ of mass-proportional damping at ω_ref = π c_p / d_e
   double density_scale = 4.0;    // "density_scale": mass scaling of the PD analysis (1 = none)
   double hold_transits = 4.0;    // "hold_transits": min hold at full load, in P-wave transits of d_e
-  double max_hold_transits = 60; // "max_hold_transits": give up waiting for rest after this
+  double max_hold_transits = 20; // "max_hold_transits": give up waiting for rest after this
   double ke_tolerance = 1e-3;    // "ke_tolerance": at rest when kinetic energy <= this × elastic work
   bool elastic_preload = true;     // "elastic_preload": start from the static state just before the first break
   double preload_fraction = 0.9;   // "preload_fraction": of the load factor that breaks the first bond
