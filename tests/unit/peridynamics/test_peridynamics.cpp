@@ -479,6 +479,34 @@ TEST(PeridynamicsModel, AnalyseSplitsOrKeepsAGrain) {
   EXPECT_FALSE(low.fracture.has_value());
 }
 
+// A grain on two lower contacts pressed from above (three balanced contacts, rotated
+// grain): it splits; all forces grow in proportion with the largest at the loading rate,
+// so the force at the split does not depend on how far above it the final load lies.
+TEST(PeridynamicsModel, ThreeContactsSplitIndependentlyOfTheFinalLoad) {
+  PdOptions o;
+  o.spacing_fraction = 0.1;
+  const PeridynamicsModel model{o};
+  Grain g = sphere_grain(1e-3, 30.0);
+  g.orientation = Quat::from_axis_angle({0.3, 1, 0.2}, 0.7);
+  auto analyse = [&](double F) {
+    const double R = 1e-3, c = std::sqrt(0.5);
+    std::vector<Contact> cs(3);
+    for (auto& x : cs) x.a = g.id;
+    cs[0].point = g.position + Vec3{0, 0, R}, cs[0].force = {0, 0, -F};
+    cs[1].point = g.position + Vec3{R * c, 0, -R * c}, cs[1].force = Vec3{-c, 0, c} * (F / (2 * c));
+    cs[2].point = g.position + Vec3{-R * c, 0, -R * c}, cs[2].force = Vec3{c, 0, c} * (F / (2 * c));
+    return model.analyse(g, table1(), cs);
+  };
+  const Analysis a = analyse(300.0), b = analyse(500.0);
+  ASSERT_TRUE(a.broken && b.broken);
+  EXPECT_NEAR(a.criterion, b.criterion, 0.02 * a.criterion);  // equal up to rounding of the load scale
+  EXPECT_GT(a.criterion, 50.0);
+  EXPECT_LT(a.criterion, 300.0);
+  const auto& pc = std::get<PointClusters>(*a.fracture);
+  EXPECT_GE(pc.clusters, 2);
+  EXPECT_EQ(pc.cluster.size(), pc.points.size());
+}
+
 // analyse() is const and runs for several grains at once (one grain per OpenMP thread, as
 // in Simulation::check_breakage): the same results as one after the other.
 TEST(PeridynamicsModel, ConcurrentAnalysesMatchSerial) {
