@@ -303,12 +303,12 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
     Vec3 point, force;
   };
   std::vector<Local> loads;
-  const Quat to_body = g.orientation.conjugate();
+  const Quat to_body = g.orientation.normalized().conjugate();  // body ← world
   for (const auto& c : contacts) {
     require(is_finite(c.point) && is_finite(c.force),
             "non-finite contact point or force on grain " + std::to_string(g.id));
     if (norm2(c.force) == 0) continue;
-    loads.push_back({g.to_local(c.point), to_body.rotate(c.force)});
+    loads.push_back({to_body.rotate(c.point - g.position), to_body.rotate(c.force)});
   }
   for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
   if (loads.size() < 2) return finish("no_load");
