@@ -303,7 +303,11 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
     Vec3 point, force;
   };
   std::vector<Local> loads;
-  const Quat to_body = g.orientation.normalized().conjugate();  // body ← world
+  const Quat& q = g.orientation;
+  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  require(std::isfinite(qn) && qn > 0 && is_finite(g.position),
+          "grain " + std::to_string(g.id) + " has a non-finite pose");
+  const Quat to_body = q.normalized().conjugate();  // body ← world
   for (const auto& c : contacts) {
     require(is_finite(c.point) && is_finite(c.force),
             "non-finite contact point or force on grain " + std::to_string(g.id));
