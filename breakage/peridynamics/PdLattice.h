@@ -2,6 +2,7 @@
 // a cubic lattice, and each point's full bond family in CSR form (every point owns the
 // list of its neighbours, so force sums need no atomics and no write races).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 

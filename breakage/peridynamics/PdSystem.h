@@ -40,7 +40,7 @@ class PdSystem {
   void add_load(const std::vector<std::int32_t>& points, const Vec3& total_force);
   bool is_fixed(std::int32_t i) const { return free_[i] == 0.0; }
 
-  // Largest stable step of the explicit scheme: the Silling–Askari bound (2002) extended
+  // Largest stable step of the explicit scheme: the Silling–Askari bound (2005) extended
   // to the LPS — a Gershgorin bound on the linearised force operator, so
   // dt <= 2 / ω_max is guaranteed — without any safety factor.
   double stable_dt() const;
