@@ -99,15 +99,20 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
   const double damping = 2.0 * o.damping_ratio * kPi * c_p / d_e;
   const long check = std::max<long>(1, o.check_interval);
   long broken_seen = 0;
-  double t_full = -1;  // time the full load was reached
+  double t_full = -1;   // time the full load was reached
+  double t_split = -1;  // time the first split was seen; the load then stays at its value
   const pd::Lattice& L = sys.lattice();
   for (long n = 0;; ++n) {
     const double t = t0 + n * dt;
-    const double lambda = std::min(lambda_max, ramp * t);
+    const double lambda = t_split >= 0 ? r.lambda : std::min(lambda_max, ramp * t);
     if (lambda >= lambda_max && t_full < 0) t_full = t;
     sys.step(dt, lambda, damping, o.threads);
     r.steps = n + 1;
     r.lambda = lambda;
+    if (t_split >= 0) {
+      if (t - t_split >= o.post_split_transits * transit || r.steps >= o.max_steps) break;
+      continue;
+    }
     if (r.steps % check == 0 || r.steps >= o.max_steps) {
       const long broken = sys.broken_face_bonds();
       if (broken != broken_seen) {
@@ -116,7 +121,9 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
         if (pd::major_count(comp, o.min_child_fraction) >= 2) {
           r.split = true;
           r.outcome = "split";
-          break;
+          t_split = t;
+          if (o.post_split_transits <= 0) break;
+          continue;
         }
       }
       if (t_full >= 0 && t - t_full >= o.hold_transits * transit) {
@@ -186,6 +193,7 @@ PdOptions pd_options_from_config(const Config& cfg) {
   o.hold_transits = cfg.number("hold_transits", o.hold_transits, 0.0, 1e6);
   o.max_hold_transits = cfg.number("max_hold_transits", o.max_hold_transits, 0.0, 1e7);
   o.ke_tolerance = cfg.number("ke_tolerance", o.ke_tolerance, 0.0, 1.0);
+  o.post_split_transits = cfg.number("post_split_transits", o.post_split_transits, 0.0, 1e6);
   o.elastic_preload = cfg.boolean("elastic_preload", o.elastic_preload);
   o.preload_fraction = cfg.number("preload_fraction", o.preload_fraction, 0.0, 1.0);
   o.preload_tolerance = cfg.number("preload_tolerance", o.preload_tolerance, 1e-14, 1e-2);
