@@ -10,6 +10,7 @@
 #if CRUMBLE_WITH_CGAL
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
+#include "breakage/peridynamics/Peridynamics.h"
 
 namespace crumble {
 
@@ -61,6 +62,7 @@ Table<ModelFactory>& breakage_models() {
     Table<ModelFactory> t("breakage model");
     t.add({"none", "grains never break (rigid runs)",
            [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}});
+    t.add({"peridynamics", "LPS peridynamics with critical-stretch bonds (Zhu & Zhao 2019)", make_peridynamics, {}, {3}});
     return t;
   }();
   return t;

@@ -1,0 +1,128 @@
+// The linear peridynamic solid (LPS, seeds/000 eqs. 1–4, influence function 1) on a
+// Lattice, with critical-stretch bond breakage and explicit time integration.
+//
+// Positions are stored as (x, y, z, aθ) per point (PdKernel.h), the rest as structures of
+// arrays; bonds as CSR with a per-bond factor `alive`
+// = (partial-volume weight) × (0 once broken), so the hot loops multiply instead of
+// branching on broken bonds. Each point sums over its own full bond list: a pass over the
+// points can be split between threads without atomics, and every point's sum is computed
+// in the same order whatever the thread count (results are bitwise independent of it).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "breakage/peridynamics/PdLattice.h"
+
+namespace crumble::pd {
+
+struct LpsMaterial {
+  double bulk = 0;     // K, Pa
+  double shear = 0;    // μ, Pa
+  double density = 0;  // ρ used in the equation of motion, kg/m³ (may be mass-scaled)
+  static LpsMaterial from_young(double young, double poisson, double density);
+};
+
+// seeds/000 eq. 5 (Madenci & Oterkus): critical stretch of the LPS for G_c and horizon δ.
+double critical_stretch(double gc, double bulk, double shear, double horizon);
+
+class PdSystem {
+ public:
+  PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critical_stretch);
+
+  const Lattice& lattice() const { return L_; }
+  std::size_t size() const { return L_.size(); }
+
+  // Boundary conditions. Fixed points keep zero displacement and velocity. A load adds
+  // `total_force` (N, at load factor 1), spread uniformly over `points`; fixed points get
+  // no share (seeds/000 §3.1: "no force will be applied to material points within the
+  // fixed zone").
+  void fix(const std::vector<std::int32_t>& points);
+  void add_load(const std::vector<std::int32_t>& points, const Vec3& total_force);
+  bool is_fixed(std::int32_t i) const { return free_[i] == 0.0; }
+
+  // Largest stable step of the explicit scheme: the Silling–Askari bound (2005) extended
+  // to the LPS — a Gershgorin bound on the linearised force operator, so
+  // dt <= 2 / ω_max is guaranteed — without any safety factor.
+  double stable_dt() const;
+
+  // The same limit estimated from the spectrum: power iteration on the linearised
+  // operator gives ω_max (taken 5 % high), dt = 2/ω_max. About 2.2× the Gershgorin bound on
+  // the cubic lattice; never more than 3× it.
+  double spectral_dt(int iterations = 60, int threads = 1) const;
+
+  // Internal force density f(x) (N/m³) from the current positions; breaks the bonds whose
+  // stretch exceeds the critical stretch (seeds/000 §2.1). `threads` > 1 splits the points.
+  void compute_forces(int threads = 1);
+  // One step of velocity Verlet in leapfrog form with mass-proportional damping
+  // (rate `damping`, 1/s): v ← ((1 − c dt/2) v + dt a) / (1 + c dt/2); x ← x + dt v,
+  // a = (f + λ b) / ρ, forces computed at the current positions.
+  void step(double dt, double load_factor, double damping, int threads = 1);
+
+  double kinetic_energy() const;              // J (with the density given)
+  double external_work_at_rest() const;       // ½ Σ λ b·u V: the elastic energy at equilibrium, J
+  long broken_bonds() const;                  // directed CSR entries broken
+  long broken_face_bonds() const;
+  double displacement(std::int32_t i, int axis) const;
+  Vec3 force_density(std::int32_t i) const { return {fx_[i], fy_[i], fz_[i]}; }
+  // Apply a displacement field (tests): positions ← reference + u(X).
+  template <class F>
+  void set_displacement(F&& u) {
+    for (std::size_t i = 0; i < size(); ++i) {
+      const Vec3 d = u(L_.points[i]);
+      pos_[4 * i] = L_.points[i].x + d.x;
+      pos_[4 * i + 1] = L_.points[i].y + d.y;
+      pos_[4 * i + 2] = L_.points[i].z + d.z;
+    }
+  }
+  // Dilation θ_i (seeds/000 eq. 4) from the current positions.
+  double dilatation(std::int32_t i) const;
+  Vec3 current(std::int32_t i) const { return {pos_[4 * i], pos_[4 * i + 1], pos_[4 * i + 2]}; }
+  // Partial stress Σ_j t_ij M_ij ⊗ ξ_ij V_j at point i (equals the Cauchy stress for a
+  // homogeneous deformation in the bulk), from the current positions.
+  Mat3 partial_stress(std::int32_t i) const;
+
+  // Static small-displacement solution for the loads at load factor 1 (conjugate
+  // gradients on the linearised LPS operator, fixed points held): the elastic state a
+  // slow ramp passes through before the first bond breaks. Returns the displacement
+  // (3 per point, x y z interleaved) and sets *iterations.
+  std::vector<double> static_unit_solution(double tolerance, int max_iterations, int* iterations,
+                                           int threads = 1) const;
+  // Smallest load factor at which an intact bond of the static unit solution `u1`
+  // reaches the critical stretch (infinity when no bond is stretched).
+  double first_break_factor(const std::vector<double>& u1) const;
+  // Positions X + scale·u, velocities vscale·u (the quasi-static state of a linear ramp).
+  void set_state(const std::vector<double>& u, double scale, double vscale);
+
+  const std::vector<double>& alive() const { return alive_; }
+  double load_factor() const { return lambda_; }
+
+ private:
+  struct Field3 {
+    std::vector<double> x, y, z;
+    void resize(std::size_t n) {
+      x.assign(n, 0.0);
+      y.assign(n, 0.0);
+      z.assign(n, 0.0);
+    }
+    double dot(const Field3& o) const;
+    void axpy(double a, const Field3& o);
+  };
+  void apply_operator(const Field3& u, Field3& out, int threads) const;
+
+  const Lattice& L_;
+  LpsMaterial mat_;
+  double sc_;
+  double lambda_ = 0;
+  std::vector<double> rx_, ry_, rz_;  // reference positions
+  std::vector<double> pos_;  // per point x, y, z (current, m) and a_i θ_i of the last pass
+  std::vector<double> vx_, vy_, vz_, fx_, fy_, fz_;
+  std::vector<double> bx_, by_, bz_;  // body force density at load factor 1, N/m³
+  std::vector<double> free_;          // 1 free, 0 fixed
+  std::vector<double> g_;             // 3V/m_i (eq. 4)
+  std::vector<double> a_;             // V(3K − 5μ)/m_i
+  std::vector<double> b_;             // 15μV/m_i
+  std::vector<double> kb_;            // per bond: b_i + b_j
+  std::vector<double> alive_;         // per bond: weight, or 0 once broken
+};
+
+}  // namespace crumble::pd

@@ -1,0 +1,442 @@
+#include "breakage/peridynamics/Peridynamics.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "breakage/peridynamics/PdClusters.h"
+#include "breakage/peridynamics/PdKernel.h"
+#include "breakage/peridynamics/PdLattice.h"
+#include "breakage/peridynamics/PdSystem.h"
+#include "core/Weibull.h"
+
+namespace crumble {
+
+using pd::Lattice;
+using pd::PdSystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("peridynamics: " + what);
+}
+
+struct Load {
+  std::vector<std::int32_t> points;
+  Vec3 force;  // N at load factor 1
+};
+
+struct RunResult {
+  bool split = false;
+  double lambda = 0;  // load factor at the split (or at the end)
+  long steps = 0;
+  long broken_bonds = 0;
+  int static_iterations = 0;
+  double dt = 0;
+  std::string outcome;
+};
+
+// Lattice points within `radius` of point `centre` (the contact zone, seeds/000 Fig. 4).
+std::vector<std::int32_t> zone(const Lattice& L, std::int32_t centre, double radius) {
+  std::vector<std::int32_t> z;
+  const double r2 = radius * radius;
+  for (std::size_t i = 0; i < L.size(); ++i)
+    if (norm2(L.points[i] - L.points[centre]) <= r2) z.push_back(static_cast<std::int32_t>(i));
+  return z;
+}
+
+std::int32_t nearest_point(const Lattice& L, const Vec3& p, double* dist) {
+  std::int32_t best = 0;
+  double d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < L.size(); ++i) {
+    const double d = norm2(L.points[i] - p);
+    if (d < d2) {
+      d2 = d;
+      best = static_cast<std::int32_t>(i);
+    }
+  }
+  *dist = std::sqrt(d2);
+  return best;
+}
+
+// The common driver: load factor λ(t) = min(λ_max, ramp·t), explicit steps until the
+// lattice has two major pieces, or the full load has been held and the motion has died
+// down, or the step cap.
+//
+// Elastic preload (option elastic_preload): until the first bond breaks the grain is a
+// linear elastic solid, and a ramp slow against the grain's wave transit time (§5: ≳ 100
+// transits) follows the static solution u(t) = λ(t)·u1 with velocity ramp·u1. So the
+// static solution u1 for unit load is computed once (conjugate gradients), the factor
+// λ_first at which its most stretched bond would break is found, and the dynamics start
+// at t0 = preload_fraction·λ_first / ramp from that quasi-static state. A grain whose
+// static stretches stay below preload_fraction·s_c at the full load ends there (intact).
+RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double c_p, const PdOptions& o) {
+  RunResult r;
+  double t0 = 0;
+  if (o.elastic_preload) {
+    int iterations = 0;
+    const auto u1 = sys.static_unit_solution(o.preload_tolerance, 20000, &iterations, o.threads);
+    r.static_iterations = iterations;
+    const double lambda0 = o.preload_fraction * sys.first_break_factor(u1);
+    if (lambda0 >= lambda_max) {
+      sys.set_state(u1, lambda_max, 0.0);
+      r.lambda = lambda_max;
+      r.outcome = "intact";
+      return r;
+    }
+    sys.set_state(u1, lambda0, ramp);
+    t0 = lambda0 / ramp;
+  }
+  const double dt = o.dt_safety * (o.dt_rule == "spectral" ? sys.spectral_dt(40, o.threads) : sys.stable_dt());
+  r.dt = dt;
+  // c_p: P-wave speed (with the analysis' density); sets the damping frequency and hold time.
+  const double transit = d_e / c_p;
+  const double damping = 2.0 * o.damping_ratio * kPi * c_p / d_e;
+  const long check = std::max<long>(1, o.check_interval);
+  long broken_seen = 0;
+  double t_full = -1;   // time the full load was reached
+  double t_split = -1;  // time the first split was seen; the load then stays at its value
+  const pd::Lattice& L = sys.lattice();
+  for (long n = 0;; ++n) {
+    const double t = t0 + n * dt;
+    const double lambda = t_split >= 0 ? r.lambda : std::min(lambda_max, ramp * t);
+    if (lambda >= lambda_max && t_full < 0) t_full = t;
+    sys.step(dt, lambda, damping, o.threads);
+    r.steps = n + 1;
+    r.lambda = lambda;
+    if (t_split >= 0) {
+      if (t - t_split >= o.post_split_transits * transit || r.steps >= o.max_steps) break;
+      continue;
+    }
+    if (r.steps % check == 0 || r.steps >= o.max_steps) {
+      const long broken = sys.broken_face_bonds();
+      if (broken != broken_seen) {
+        broken_seen = broken;
+        const auto comp = pd::face_components(L, sys.alive());
+        if (pd::major_count(comp, o.min_child_fraction) >= 2) {
+          r.split = true;
+          r.outcome = "split";
+          t_split = t;
+          if (o.post_split_transits <= 0) break;
+          continue;
+        }
+      }
+      if (t_full >= 0 && t - t_full >= o.hold_transits * transit) {
+        const double ke = sys.kinetic_energy();
+        const double w = std::abs(sys.external_work_at_rest());
+        if (ke <= o.ke_tolerance * w || t - t_full >= o.max_hold_transits * transit) {
+          r.outcome = "intact";
+          break;
+        }
+      }
+      if (r.steps >= o.max_steps) {
+        r.outcome = "step_limit";
+        break;
+      }
+    }
+  }
+  r.broken_bonds = sys.broken_bonds();
+  return r;
+}
+
+double p_wave_speed(const pd::LpsMaterial& m) { return std::sqrt((m.bulk + 4.0 * m.shear / 3.0) / m.density); }
+
+pd::LpsMaterial analysis_material(const Material& m, const PdOptions& o) {
+  return pd::LpsMaterial::from_young(m.young, m.poisson, m.density * o.density_scale);
+}
+
+// seeds/000 eq. 5 with the size correction of eq. 16: s_c = s_c(eq. 5, δ) · √(d / d_ref).
+// With δ ∝ d the product does not depend on d, so strength depends on G_c only.
+double grain_critical_stretch(double gc, const pd::LpsMaterial& mat, double horizon, double d_e, const PdOptions& o) {
+  return pd::critical_stretch(gc, mat.bulk, mat.shear, horizon) * std::sqrt(d_e / o.d_ref);
+}
+
+Lattice grain_lattice(const Shape& shape, const PdOptions& o, double d_e) {
+  const double h = o.spacing_fraction * d_e;
+  auto pts = pd::lattice_points(shape, h);
+  double V = 0;
+  if (o.volume_correction && !pts.empty()) V = shape.volume() / static_cast<double>(pts.size());
+  if (pts.empty()) return Lattice{};
+  return pd::build_lattice(pts, h, o.horizon_factor, o.partial_volumes, V);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- options
+
+PdOptions pd_options_from_config(const Config& cfg) {
+  cfg.string("type", "peridynamics");
+  PdOptions o;
+  const double inf = std::numeric_limits<double>::infinity();
+  o.spacing_fraction = cfg.number("spacing_fraction", o.spacing_fraction, 1e-3, 0.5);
+  o.horizon_factor = cfg.number("horizon_factor", o.horizon_factor, 1.0, 8.0);
+  o.partial_volumes = cfg.boolean("partial_volumes", o.partial_volumes);
+  o.volume_correction = cfg.boolean("volume_correction", o.volume_correction);
+  o.min_points = cfg.integer("min_points", o.min_points, 2, 100'000'000);
+  o.d_ref = cfg.positive("d_ref", o.d_ref);
+  o.zone_radius_factor = cfg.number("zone_radius_factor", o.zone_radius_factor, 0.0, 100.0);
+  o.contact_tolerance_factor = cfg.number("contact_tolerance_factor", o.contact_tolerance_factor, 0.0, inf);
+  o.rate_large = cfg.positive("loading_rate_large", o.rate_large);
+  o.rate_medium = cfg.positive("loading_rate_medium", o.rate_medium);
+  o.rate_small = cfg.positive("loading_rate_small", o.rate_small);
+  o.size_large = cfg.positive("loading_rate_size_large", o.size_large);
+  o.size_small = cfg.positive("loading_rate_size_small", o.size_small);
+  o.dt_safety = cfg.number("dt_safety", o.dt_safety, 1e-3, 1.0);
+  o.dt_rule = cfg.choice("dt_rule", o.dt_rule, {"spectral", "silling_askari"});
+  o.damping_ratio = cfg.number("damping_ratio", o.damping_ratio, 0.0, 10.0);
+  o.density_scale = cfg.number("density_scale", o.density_scale, 1.0, 1e8);
+  o.hold_transits = cfg.number("hold_transits", o.hold_transits, 0.0, 1e6);
+  o.max_hold_transits = cfg.number("max_hold_transits", o.max_hold_transits, 0.0, 1e7);
+  o.ke_tolerance = cfg.number("ke_tolerance", o.ke_tolerance, 0.0, 1.0);
+  o.post_split_transits = cfg.number("post_split_transits", o.post_split_transits, 0.0, 1e6);
+  o.elastic_preload = cfg.boolean("elastic_preload", o.elastic_preload);
+  o.preload_fraction = cfg.number("preload_fraction", o.preload_fraction, 0.0, 1.0);
+  o.preload_tolerance = cfg.number("preload_tolerance", o.preload_tolerance, 1e-14, 1e-2);
+  o.max_steps = cfg.integer("max_steps", o.max_steps, 1, 1'000'000'000'000L);
+  o.check_interval = cfg.integer("check_interval", o.check_interval, 1, 1'000'000);
+  o.threads = static_cast<int>(cfg.integer("threads", o.threads, 1, 1024));
+  o.min_child_fraction = cfg.number("min_child_fraction", o.min_child_fraction, 0.0, 0.5);
+  o.weibull = cfg.boolean("weibull", o.weibull);
+  o.gc0 = cfg.positive("gc0", o.gc0);
+  o.d0 = cfg.positive("d0", o.d0);
+  o.weibull_modulus = cfg.positive("weibull_modulus", o.weibull_modulus);
+  o.weibull_a = cfg.number("weibull_a", o.weibull_a, -inf, 0.0);
+  o.weibull_b = cfg.number("weibull_b", o.weibull_b, 1.0, inf);
+  o.threshold_force_ref = cfg.number("threshold_force_ref", o.threshold_force_ref, 0.0, inf);
+  try {
+    validate(o);
+  } catch (const std::invalid_argument& e) {
+    cfg.fail("", e.what());
+  }
+  return o;
+}
+
+void validate(const PdOptions& o) {
+  require(o.spacing_fraction > 0 && o.spacing_fraction <= 0.5, "spacing_fraction must lie in (0, 0.5]");
+  require(o.horizon_factor >= 1 && o.horizon_factor <= 8, "horizon_factor must lie in [1, 8]");
+  require(o.min_points >= 2, "min_points must be >= 2");
+  require(o.d_ref > 0, "d_ref must be > 0");
+  require(o.zone_radius_factor >= 0, "zone_radius_factor must be >= 0");
+  require(o.contact_tolerance_factor >= 0, "contact_tolerance_factor must be >= 0");
+  require(o.rate_large > 0 && o.rate_medium > 0 && o.rate_small > 0, "loading rates must be > 0");
+  require(o.size_small > 0 && o.size_large >= o.size_small, "loading_rate_size_small <= loading_rate_size_large");
+  require(o.dt_safety > 0 && o.dt_safety <= 1, "dt_safety must lie in (0, 1]");
+  require(o.dt_rule == "spectral" || o.dt_rule == "silling_askari", "dt_rule must be spectral or silling_askari");
+  require(o.damping_ratio >= 0, "damping_ratio must be >= 0");
+  require(o.density_scale >= 1, "density_scale must be >= 1");
+  require(o.max_steps >= 1 && o.check_interval >= 1 && o.threads >= 1, "max_steps, check_interval, threads >= 1");
+  require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
+  require(o.gc0 > 0 && o.d0 > 0 && o.weibull_modulus > 0, "gc0, d0, weibull_modulus must be > 0");
+  // eq. 12 with U in [0, 1) must give a positive strength: (U − b)/a > 0 for a < 0 < 1 <= b.
+  require(o.weibull_a < 0 && o.weibull_b >= 1, "weibull_a must be < 0 and weibull_b >= 1 (eq. 12 positive)");
+  require(o.threshold_force_ref >= 0, "threshold_force_ref must be >= 0");
+}
+
+// ---------------------------------------------------------------- strength
+
+double pd_sample_gc(const PdOptions& o, double d, double u) {
+  require(d > 0 && std::isfinite(d), "grain size must be > 0");
+  WeibullParams p;
+  p.variant = "linear";
+  p.sigma0 = 1.0;
+  p.d0 = o.d0;
+  p.modulus = o.weibull_modulus;
+  p.a = o.weibull_a;
+  p.b = o.weibull_b;
+  // eq. 12 gives σ/σ0 = (U − b)/a (d/d0)^(−3/ψ); eq. 13 is its square times G_c0.
+  const double s = weibull_sample(p, d, u);
+  return o.gc0 * s * s;
+}
+
+double pd_child_gc(const PdOptions& o, double gc_parent, double d_child, double d_parent) {
+  require(d_child > 0 && d_parent > 0, "grain sizes must be > 0");
+  // eq. 15 = eq. 14 squared
+  const double s = weibull_size_effect(1.0, d_child, d_parent, o.weibull_modulus);
+  return gc_parent * s * s;
+}
+
+double pd_threshold_force(const PdOptions& o, double gc, double d) {
+  return o.threshold_force_ref * std::sqrt(gc / o.gc0) * (d / o.d0) * (d / o.d0);
+}
+
+double pd_loading_rate(const PdOptions& o, double d) {
+  if (d >= o.size_large) return o.rate_large;
+  if (d >= o.size_small) return o.rate_medium;
+  return o.rate_small;
+}
+
+// ---------------------------------------------------------------- the model
+
+PeridynamicsModel::PeridynamicsModel(PdOptions o) : o_(std::move(o)) { validate(o_); }
+
+void PeridynamicsModel::assign_strength(Grain& g, const Material&, Rng& rng) const {
+  require(g.shape != nullptr, "grain without a shape");
+  const double d = g.shape->equivalent_diameter();
+  const double gc = o_.weibull ? pd_sample_gc(o_, d, rng.uniform())
+                               : o_.gc0 * std::pow(d / o_.d0, -6.0 / o_.weibull_modulus);  // eq. 15 from d0
+  g.strength.value = gc;
+  g.strength.threshold_force = pd_threshold_force(o_, gc, d);
+}
+
+void PeridynamicsModel::inherit_strength(const Grain& parent, Grain& child, const Material&, Rng&) const {
+  require(parent.shape && child.shape, "grain without a shape");
+  require(parent.strength.value > 0, "parent grain has no G_c");
+  const double dp = parent.shape->equivalent_diameter(), dc = child.shape->equivalent_diameter();
+  const double gc = pd_child_gc(o_, parent.strength.value, dc, dp);
+  child.strength.value = gc;
+  child.strength.threshold_force = pd_threshold_force(o_, gc, dc);
+}
+
+Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const {
+  const auto t0 = Clock::now();
+  Analysis a;
+  auto finish = [&](const std::string& outcome) {
+    a.outcome = outcome;
+    a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return a;
+  };
+  require(g.shape != nullptr, "grain " + std::to_string(g.id) + " has no shape");
+  require(g.shape->dimension() == 3, "needs a 3D grain, got " + g.shape->describe());
+  const double gc = g.strength.value;
+  require(gc > 0 && std::isfinite(gc),
+          "grain " + std::to_string(g.id) + " has no critical energy release rate (assign_strength not called?)");
+
+  // Contact forces into the body frame (seeds/000 §3.1).
+  struct Local {
+    Vec3 point, force;
+  };
+  std::vector<Local> loads;
+  const Quat& q = g.orientation;
+  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  require(std::isfinite(qn) && qn > 0 && is_finite(g.position),
+          "grain " + std::to_string(g.id) + " has a non-finite pose");
+  const Quat to_body = q.normalized().conjugate();  // body ← world
+  for (const auto& c : contacts) {
+    require(is_finite(c.point) && is_finite(c.force),
+            "non-finite contact point or force on grain " + std::to_string(g.id));
+    if (norm2(c.force) == 0) continue;
+    loads.push_back({to_body.rotate(c.point - g.position), to_body.rotate(c.force)});
+  }
+  for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
+  if (loads.size() < 2) return finish("no_load");
+
+  const double d_e = g.shape->equivalent_diameter();
+  const Lattice L = grain_lattice(*g.shape, o_, d_e);
+  a.points = static_cast<long>(L.size());
+  a.bonds = L.bonds();
+  if (static_cast<long>(L.size()) < o_.min_points) return finish("too_few_points");
+
+  // Contact zones; the zone of the largest force is fixed, the others carry their force.
+  std::size_t largest = 0;
+  for (std::size_t k = 1; k < loads.size(); ++k)
+    if (norm2(loads[k].force) > norm2(loads[largest].force)) largest = k;
+  const double zr = o_.zone_radius_factor * L.spacing * (1.0 + 1e-9);
+  std::vector<std::int32_t> centre(loads.size());
+  for (std::size_t k = 0; k < loads.size(); ++k) {
+    double dist = 0;
+    centre[k] = nearest_point(L, loads[k].point, &dist);
+    if (dist > o_.contact_tolerance_factor * L.spacing) return finish("contact_off_grain");
+  }
+  const auto mat = analysis_material(m, o_);
+  PdSystem sys(L, mat, grain_critical_stretch(gc, mat, L.horizon, d_e, o_));
+  sys.fix(zone(L, centre[largest], zr));
+  for (std::size_t k = 0; k < loads.size(); ++k)
+    if (k != largest) sys.add_load(zone(L, centre[k], zr), loads[k].force);
+
+  // Linear ramp: the largest force grows at the size-dependent rate (§5).
+  const double fmax = a.load;
+  const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
+  a.steps = r.steps;
+  if (r.split) {
+    a.broken = true;
+    a.criterion = r.lambda * fmax;
+    a.fracture = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
+  }
+  return finish(r.outcome);
+}
+
+std::unique_ptr<BreakageModel> make_peridynamics(const Config& cfg, const EngineContext& ctx) {
+  if (ctx.dimension != 3) cfg.fail("type", "peridynamics needs a 3D scenario");
+  return std::make_unique<PeridynamicsModel>(pd_options_from_config(cfg));
+}
+
+// ---------------------------------------------------------------- single-grain crushing
+
+CrushResult crush_single_grain(const Shape& shape, const Material& m, double gc, const PdOptions& o) {
+  validate(o);
+  const auto t0 = Clock::now();
+  CrushResult res;
+  require(shape.dimension() == 3, "needs a 3D shape");
+  const double d_e = shape.equivalent_diameter();
+  res.diameter = d_e;
+  const Lattice L = grain_lattice(shape, o, d_e);
+  res.points = static_cast<long>(L.size());
+  res.bonds = L.bonds();
+  require(static_cast<long>(L.size()) >= o.min_points,
+          "lattice of " + std::to_string(L.size()) + " points is below min_points = " + std::to_string(o.min_points));
+  const auto mat = analysis_material(m, o);
+  PdSystem sys(L, mat, grain_critical_stretch(gc, mat, L.horizon, d_e, o));
+  double dist = 0;
+  const Aabb b = shape.bounds();
+  const std::int32_t top = nearest_point(L, {0, 0, b.hi.z}, &dist);
+  const std::int32_t bottom = nearest_point(L, {0, 0, b.lo.z}, &dist);
+  const double zr = o.zone_radius_factor * L.spacing * (1.0 + 1e-9);
+  sys.fix(zone(L, bottom, zr));
+  sys.add_load(zone(L, top, zr), {0, 0, -1.0});  // 1 N at load factor 1
+  const RunResult r =
+      run(sys, pd_loading_rate(o, d_e), std::numeric_limits<double>::infinity(), d_e, p_wave_speed(mat), o);
+  res.steps = r.steps;
+  res.static_iterations = r.static_iterations;
+  res.dt = r.dt;
+  res.broken_bonds = r.broken_bonds;
+  res.outcome = r.outcome;
+  res.split = r.split;
+  if (r.split) {
+    res.force = r.lambda;
+    res.strength = res.force / (d_e * d_e);
+  }
+  res.clusters = pd::point_clusters(L, sys.alive(), o.min_child_fraction);
+  res.fragments = res.split ? res.clusters.clusters : 1;
+  res.fragment_volumes.assign(res.clusters.clusters, 0.0);
+  for (int c : res.clusters.cluster) res.fragment_volumes[c] += L.point_volume;
+  res.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return res;
+}
+
+// ---------------------------------------------------------------- kernel benchmark
+
+std::string pd_kernel_bench(long steps, int threads) {
+  require(steps >= 1, "bench needs steps >= 1");
+  require(threads >= 1, "bench needs threads >= 1");
+  // LAMMPS examples/peri: lattice sc 0.0005, region cylinder y 0 0 0.005 -0.005 0.0.
+  const double h = 0.5e-3;
+  std::vector<Vec3> pts;
+  for (int k = -10; k <= 10; ++k)
+    for (int j = -10; j <= 0; ++j)
+      for (int i = -10; i <= 10; ++i)
+        if (i * i + k * k <= 100) pts.push_back({i * h, j * h, k * h});
+  const Lattice L = pd::build_lattice(pts, h, 3.0002, false);
+  // LAMMPS's material: K = 14.9 GPa, μ = 14.9 GPa (pair_coeff), ρ = 2200; s00 = 0.0005.
+  const pd::LpsMaterial mat{14.9e9, 14.9e9, 2200};
+  PdSystem sys(L, mat, 0.0005);
+  // A smooth deformation so the kernel does real work (no bond reaches the critical stretch).
+  sys.set_displacement([](const Vec3& p) { return Vec3{2e-5 * p.x, -1e-5 * p.y * p.y / 5e-3, 2e-5 * p.z}; });
+  const double dt = 0.8 * sys.stable_dt();
+  const auto t0 = Clock::now();
+  for (long s = 0; s < steps; ++s) sys.step(dt, 0.0, 0.0, threads);
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::ostringstream os;
+  os.precision(6);
+  os << "{\"points\":" << L.size() << ",\"bonds\":" << L.bonds() << ",\"steps\":" << steps
+     << ",\"threads\":" << threads << ",\"isa\":\"" << pd::kernel::isa() << "\",\"wall_seconds\":" << wall
+     << ",\"bond_visits_per_second\":" << static_cast<double>(L.bonds()) * steps / wall
+     << ",\"broken_bonds\":" << sys.broken_bonds() << "}";
+  return os.str();
+}
+
+}  // namespace crumble
