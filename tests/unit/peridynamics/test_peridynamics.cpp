@@ -644,17 +644,11 @@ TEST(PeridynamicsModel, OtherShapesDiscretiseAndCrush) {
   }
 }
 
-// The grains of seeds/000 §5 are 42-vertex polyhedra; their lattice needs MeshDistance
-// (implemented on another branch: skipped while this build has the placeholder).
+// The grains of seeds/000 §5 are 42-vertex polyhedra; their lattice uses MeshDistance.
 TEST(PeridynamicsModel, PolyhedralGrainCrushes) {
   TriMesh m = icosphere(1);
   m.scale(1e-3);
   const auto s = Shape::polyhedron(m);
-  try {
-    (void)s->contains({0, 0, 0});
-  } catch (const std::exception& e) {
-    GTEST_SKIP() << "Shape::contains for polyhedra not available: " << e.what();
-  }
   PdOptions o;
   o.spacing_fraction = 0.1;
   const CrushResult r = crush_single_grain(*s, table1(), 30.0, o);
