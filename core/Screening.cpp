@@ -32,16 +32,21 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
     return r;
   }
   r.unbalanced_force_ratio = mean > 0 ? norm(sum) / mean : 0;
+  // Moments about the point of fixity (the largest force). The "average magnitude of
+  // moment" is taken as the mean of |x − x_fix|·|F| over the other contacts: the moment
+  // each force could exert. (With the plain mean of |(x − x_fix) × F|, two nearly collinear
+  // forces — a grain between two plates — give a ratio of 2 from round-off alone.)
   const Vec3 fix = contacts[imax].point;
   Vec3 msum;
-  double mmean = 0;
-  for (const auto& c : contacts) {
-    const Vec3 m = cross(c.point - fix, c.force);
-    msum += m;
-    mmean += norm(m);
+  double mscale = 0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    if (i == imax) continue;
+    const Vec3 arm = contacts[i].point - fix;
+    msum += cross(arm, contacts[i].force);
+    mscale += norm(arm) * norm(contacts[i].force);
   }
-  mmean /= static_cast<double>(contacts.size());
-  r.unbalanced_moment_ratio = mmean > 0 ? norm(msum) / mmean : 0;
+  mscale /= static_cast<double>(contacts.size() - 1);
+  r.unbalanced_moment_ratio = mscale > 0 ? norm(msum) / mscale : 0;
   if (s.max_unbalanced_force_ratio > 0 && r.unbalanced_force_ratio > s.max_unbalanced_force_ratio) {
     r.reason = "unbalanced_force";
     return r;

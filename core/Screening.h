@@ -24,10 +24,11 @@ struct ScreeningResult {
   double unbalanced_moment_ratio = 0;
 };
 
-// `contacts` are the contacts on `g` (force on g). Unbalanced force ratio = |Σ F| / mean
-// |F|; unbalanced moment ratio = |Σ (x − x_fix) × F| / mean |(x − x_fix) × F| about the
-// point of the largest force (the zone a peridynamic analysis fixes). Gravity is left out:
-// at the forces that break grains it is < 1e-4 of them.
+// `contacts` are the contacts on `g` (force on g). seeds/000 §5: unbalanced force ratio =
+// |Σ F| / mean |F|; unbalanced moment ratio = |Σ (x − x_fix) × F| / mean |x − x_fix|·|F|
+// about the point of the largest force (the zone a peridynamic analysis fixes) — the paper
+// says "average magnitude of moment"; see Screening.cpp for why the lever-arm form. Gravity
+// is left out: at the forces that break grains it is < 1e-4 of them.
 ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s);
 
 }  // namespace crumble

@@ -228,6 +228,29 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
   return spec;
 }
 
+PackingSpec scene_from_config(const Config& sc, int dim) {
+  PackingSpec spec;
+  spec.type = sc.choice("type", "single_grain", {"single_grain"});
+  const double d = sc.positive("diameter", 2e-3);
+  Config shc = sc.child("shape");
+  const Shape::Ptr tmpl = shape_from_config(shc, dim, /*unit_size=*/true);
+  PlacedGrain g;
+  g.shape = tmpl->scaled(d / tmpl->equivalent_diameter());
+  g.shape_spec = scaled_spec(shc.doc(), d / tmpl->equivalent_diameter());
+  g.material = static_cast<int>(sc.integer("material", 0, 0));
+  const Aabb b = g.shape->bounds();
+  const double half_height = dim == 3 ? -b.lo.z : -b.lo.y;
+  const double height = dim == 3 ? b.hi.z - b.lo.z : b.hi.y - b.lo.y;
+  spec.container.lx = 3 * d;
+  spec.container.ly = dim == 3 ? 3 * d : 0;
+  spec.container.height = height;
+  spec.container.platen_mass = sc.number("platen_mass", 0.0, 0.0);
+  g.position = dim == 3 ? Vec3{1.5 * d, 1.5 * d, half_height} : Vec3{1.5 * d, half_height, 0};
+  spec.grains.push_back(std::move(g));
+  spec.settle = false;
+  return spec;
+}
+
 long build_packing(Simulation& sim, const PackingSpec& spec) {
   sim.set_container(spec.container);
   for (const auto& pg : spec.grains) {

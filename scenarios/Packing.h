@@ -50,6 +50,12 @@ struct PackingSpec {
 // Reads the "packing" and "container" objects; for "cloud" draws the grains now.
 PackingSpec packing_from_config(const Config& packing, const Config& container, int dimension, Rng& rng);
 
+// Scene builders: a whole set-up from a few numbers.
+//   {"type": "single_grain", "diameter": d, "shape": SHAPE (template, default sphere)}:
+//   one grain resting on the floor of a 3d × 3d box, the platen touching its top
+//   (seeds/000 §4.2: a grain crushed between two plates).
+PackingSpec scene_from_config(const Config& scene, int dimension);
+
 // Adds the grains to the simulation and, for generated clouds, pushes the platen down until
 // the packing is stable (the initial state of the run). Returns the settling steps.
 long build_packing(Simulation& sim, const PackingSpec& spec);

@@ -113,7 +113,13 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
 
   // The packing first: its errors do not depend on which engine is chosen.
   Rng packing_rng = Rng(sc.seed).derive(0xC10D);
-  sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
+  if (root.has("scene")) {
+    if (root.has("packing") || root.has("container"))
+      root.fail("scene", "a scene builds its own container and packing: remove 'packing' and 'container'");
+    sc.packing = scene_from_config(root.child("scene"), dim);
+  } else {
+    sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
+  }
 
   auto check_dim = [&](const auto& entry, const Config& c) {
     for (int d : entry.dimensions)

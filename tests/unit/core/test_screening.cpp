@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/Screening.h"
 
 using namespace crumble;
@@ -66,5 +68,15 @@ TEST(Screening, UnbalancedMoment) {
   std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0.5e-3, 0, -1e-3}, {0, 0, 100})};
   auto r = screen(g, cs, {});
   EXPECT_STREQ(r.reason, "unbalanced_moment");
-  EXPECT_GT(r.unbalanced_moment_ratio, 0.2);
+  // |M| = 0.5 mm · 100 N; scale = |(0.5, 0, -2) mm| · 100 N.
+  EXPECT_NEAR(r.unbalanced_moment_ratio, 0.5 / std::sqrt(0.25 + 4.0), 1e-12);
+}
+
+TEST(Screening, NearlyCollinearPairIsBalanced) {
+  // A grain between two plates: round-off offsets must not read as an unbalanced moment.
+  const Grain g = grain(2e-3, 80);
+  std::vector<Contact> cs{contact({1e-12, 0, 1e-3}, {0, 0, -100}), contact({0, 1e-12, -1e-3}, {0, 0, 100})};
+  auto r = screen(g, cs, {});
+  EXPECT_TRUE(r.selected) << r.reason << " " << r.unbalanced_moment_ratio;
+  EXPECT_LT(r.unbalanced_moment_ratio, 1e-8);
 }
