@@ -8,6 +8,8 @@
 #include <fstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -122,4 +124,57 @@ TEST(Cli, RunWritesEveryOutput) {
                           "grains_initial", "grains_final", "breakage_events", "mass_initial_kg", "mass_final_kg",
                           "mass_removed_kg", "void_ratio_initial", "void_ratio_final", "max_platen_stress_Pa"})
     EXPECT_NE(s.find(std::string("\"") + key + "\""), std::string::npos) << key;
+}
+
+namespace {
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+}  // namespace
+
+TEST(Cli, SameSeedSameSummary) {
+  // Two runs of a small rigid Bullet oedometer with one thread: summary.json identical but
+  // for the wall-clock figures; series.csv identical.
+  const fs::path base = fs::temp_directory_path() / "crumble_cli_test";
+  const std::string sets =
+      " --quiet --threads 1 --set packing.count=25 --set container.lx=6e-3 --set container.ly=6e-3"
+      " --set loading.max_stress=2e5 --set loading.ramp_time=0.01 --set engine.solver_iterations=200";
+  std::string sums[2], series[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path out = base / ("det" + std::to_string(k));
+    fs::remove_all(out);
+    const Result r = run("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json --out " +
+                         out.string() + sets);
+    ASSERT_EQ(r.status, 0) << r.output;
+    auto j = nlohmann::json::parse(slurp(out / "summary.json"));
+    j.erase("wall_seconds");
+    j.erase("time_breakdown_s");
+    sums[k] = j.dump();
+    series[k] = slurp(out / "series.csv");
+  }
+  EXPECT_EQ(sums[0], sums[1]);
+  EXPECT_EQ(series[0], series[1]);
+  EXPECT_GT(series[0].size(), 100u);
+}
+
+TEST(Cli, ShapeReportsResolution) {
+  const Result r = run("shape --json '{\"type\":\"sphere\",\"radius\":1}' --representation level_set --spacing 0.05");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_NEAR(j["volume"].get<double>(), 4.18879, 0.004 * 4.18879);
+  EXPECT_GT(j["nodes"].get<long>(), 100);
+  EXPECT_EQ(j["grid"].size(), 3u);
+  EXPECT_NEAR(j["surface_area"].get<double>(), 4 * 3.14159265, 0.01 * 4 * 3.14159265);
+  const Result m = run("shape --json '{\"type\":\"box\",\"half_extents\":[1,2,3]}' --representation hull");
+  ASSERT_EQ(m.status, 0) << m.output;
+  const auto h = nlohmann::json::parse(m.output);
+  EXPECT_NEAR(h["volume"].get<double>(), 48.0, 1e-9);
+  EXPECT_EQ(h["nodes"].get<long>(), 8);
+  const Result d = run("shape --json '{\"type\":\"disk\",\"radius\":1,\"dimension\":2}' --representation level_set");
+  EXPECT_EQ(d.status, 0) << d.output;
+  expect_input_error("shape --json '{\"type\":\"sphere\",\"radius\":-1}'", "/radius");
+  expect_input_error("shape --json '{\"type\":\"sphere\",\"radius\":1}' --spacing 3", "thinner");
+  expect_input_error("shape --json '{\"type\":\"polyhedron\",\"vertices\":[[0,0,0],[1,0,0],[0,1,0]],\"triangles\":[[0,1,2]]}'",
+                     "not closed");
 }
