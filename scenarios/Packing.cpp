@@ -68,7 +68,10 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     // Sizes: a PSD by mass, or one "diameter" for all grains.
     std::vector<PsdPoint> psd;
     double mono = 0;
-    if (pc.has("diameter")) {
+    const bool keep_size = pc.boolean("keep_template_size", false);
+    if (keep_size) {
+      // Grains keep the sizes their templates give (e.g. YADE's discharge scene).
+    } else if (pc.has("diameter")) {
       mono = pc.positive("diameter");
       if (pc.has("psd")) pc.fail("psd", "give either psd or diameter, not both");
     } else {
@@ -111,15 +114,25 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     spec.settle_settings.tolerance = st.positive("tolerance", 1e-3);
     spec.settle_settings.window = st.positive("window", 0.01);
 
-    const auto diam = mono > 0 ? std::vector<double>(static_cast<std::size_t>(count), mono)
-                               : sample_psd(psd, static_cast<std::size_t>(count), rng);
+    std::vector<double> diam;
+    std::vector<std::size_t> pick;
+    for (long n = 0; n < count; ++n)
+      pick.push_back(tmpls.size() == 1 ? 0 : static_cast<std::size_t>(rng.uniform() * tmpls.size()) % tmpls.size());
+    if (keep_size) {
+      for (std::size_t t : pick) diam.push_back(tmpls[t]->equivalent_diameter());
+    } else if (mono > 0) {
+      diam.assign(static_cast<std::size_t>(count), mono);
+    } else {
+      diam = sample_psd(psd, static_cast<std::size_t>(count), rng);
+    }
     double vs = 0;
     std::vector<Shape::Ptr> shapes;
     std::vector<std::size_t> which;
     // Grains of the same template and size share one Shape (and so one level set / hull).
     std::map<std::pair<std::size_t, double>, Shape::Ptr> cache;
-    for (double d : diam) {
-      const std::size_t t = tmpls.size() == 1 ? 0 : static_cast<std::size_t>(rng.uniform() * tmpls.size()) % tmpls.size();
+    for (std::size_t i = 0; i < diam.size(); ++i) {
+      const std::size_t t = pick[i];
+      const double d = diam[i];
       auto& sh = cache[{t, d}];
       if (!sh) sh = tmpls[t]->scaled(d / tmpls[t]->equivalent_diameter());
       shapes.push_back(sh);
