@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "backends/lsdem/LsdemEngine.h"
@@ -52,12 +53,15 @@ class CrushingRecorder : public Observer {
   std::vector<double> diam_;
 };
 
-// NCL slope and fractal dimension for summary.json.
+// ncl.csv (void ratio and grain count against log stress), and the NCL slope and fractal
+// dimension for summary.json.
 class CompressionRecorder : public Observer {
  public:
+  explicit CompressionRecorder(std::string dir) : dir_(std::move(dir)) {}
   void on_sample(const Simulation&, const RunState& s) override {
     stress_.push_back(s.platen_stress);
     e_.push_back(s.void_ratio);
+    n_.push_back(s.grains);
   }
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
     // seeds/000 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
@@ -70,6 +74,11 @@ class CompressionRecorder : public Observer {
         x.push_back(stress_[i]);
         y.push_back(e_[i]);
       }
+    std::ostringstream os;
+    os << std::setprecision(10) << "platen_stress_Pa,log10_stress,void_ratio,grains\n";
+    for (std::size_t i = 0; i < stress_.size(); ++i)
+      if (stress_[i] > 0) os << stress_[i] << ',' << std::log10(stress_[i]) << ',' << e_[i] << ',' << n_[i] << '\n';
+    write_file_atomic(dir_ + "/ncl.csv", os.str());
     const double slope = loglog_slope(x, y);
     if (std::isfinite(slope)) sum.extra["ncl_loglog_slope"] = slope;
     std::vector<double> d;
@@ -80,7 +89,9 @@ class CompressionRecorder : public Observer {
   }
 
  private:
+  std::string dir_;
   std::vector<double> stress_, e_;
+  std::vector<std::size_t> n_;
 };
 
 Json mass_json(const MassProperties& mp) {
@@ -104,7 +115,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final));
-  sim.add_observer(std::make_shared<CompressionRecorder>());
+  sim.add_observer(std::make_shared<CompressionRecorder>(out));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());
 }
 

@@ -10,7 +10,7 @@ command -v lmp >/dev/null || { echo "bench: LAMMPS not installed (apt-get instal
 [ -f "$input" ] || { echo "bench: LAMMPS input $input not found" >&2; exit 2; }
 dir=$(mktemp -d)
 cp "$input" "$dir/in.lps_kernel"
-lammps_s=$(cd "$dir" && OMP_NUM_THREADS=1 lmp -in in.lps_kernel -log none -screen - 2>/dev/null |
+lammps_s=$(cd "$dir" && OMP_NUM_THREADS=1 lmp -in in.lps_kernel -log none 2>/dev/null |
            sed -n 's/^Loop time of \([0-9.e+-]*\) on 1 procs.*/\1/p')
 rm -rf "$dir"
 [ -n "$lammps_s" ] || { echo "bench: could not read LAMMPS loop time" >&2; exit 1; }

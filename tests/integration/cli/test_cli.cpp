@@ -116,7 +116,7 @@ TEST(Cli, RunWritesEveryOutput) {
   const Result r = run("run " + f + " --out " + out.string() + " --quiet");
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* name : {"summary.json", "series.csv", "events.csv", "psd.csv", "effective_scenario.json",
-                           "packing.json", "breakage_per_mpa.csv", "grains.pvd"})
+                           "packing.json", "breakage_per_mpa.csv", "grains.pvd", "ncl.csv"})
     EXPECT_TRUE(fs::exists(out / name)) << name;
   std::ifstream in(out / "summary.json");
   std::string s((std::istreambuf_iterator<char>(in)), {});
