@@ -19,6 +19,10 @@ struct PointClusters {
   std::vector<char> on_surface;    // per point
   int clusters = 0;
   std::vector<std::vector<Vec3>> fracture_points;  // per cluster
+  // The points (and fracture points) are given in the lattice's own frame; `frame`
+  // rotates them into the parent's body frame (identity: already in the body frame).
+  // Builders keep lattice coordinates exact and rotate only their result.
+  Quat frame;
 };
 
 // Plane n·x = d in the parent frame; n is a unit vector.

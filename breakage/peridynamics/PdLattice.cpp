@@ -163,6 +163,27 @@ Lattice build_lattice(const std::vector<Vec3>& pts, double spacing, double horiz
   return L;
 }
 
+std::vector<Vec3> lattice_points(const Shape& shape, double spacing, const Quat& frame) {
+  if (frame.w == 1 && frame.x == 0 && frame.y == 0 && frame.z == 0) return lattice_points(shape, spacing);
+  if (shape.dimension() != 3) throw std::invalid_argument("peridynamics: needs a 3D shape, got " + shape.describe());
+  if (!(spacing > 0)) throw std::invalid_argument("peridynamics: lattice spacing must be > 0");
+  // Any rotation of the shape stays inside its bounding sphere.
+  const double br = shape.bounding_radius();
+  const int n = static_cast<int>(std::ceil(br / spacing)) + 1;
+  const double cells = std::pow(2.0 * n + 1, 3);
+  if (cells > 5e7)
+    throw std::invalid_argument("peridynamics: lattice of " + std::to_string(cells) + " cells for " +
+                                shape.describe() + " is too fine");
+  std::vector<Vec3> pts;
+  for (int z = -n; z <= n; ++z)
+    for (int y = -n; y <= n; ++y)
+      for (int x = -n; x <= n; ++x) {
+        const Vec3 p{x * spacing, y * spacing, z * spacing};
+        if (norm2(p) <= br * br * (1 + 1e-12) && shape.contains(frame.rotate(p))) pts.push_back(p);
+      }
+  return pts;
+}
+
 std::vector<Vec3> lattice_points(const Shape& shape, double spacing) {
   if (shape.dimension() != 3) throw std::invalid_argument("peridynamics: needs a 3D shape, got " + shape.describe());
   if (!(spacing > 0)) throw std::invalid_argument("peridynamics: lattice spacing must be > 0");

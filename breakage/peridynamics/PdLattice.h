@@ -58,5 +58,8 @@ Lattice build_lattice(const std::vector<Vec3>& points, double spacing, double ho
 // Lattice points i·spacing (i integer, through the shape's centroid) inside `shape`
 // (Shape::contains), any 3D shape.
 std::vector<Vec3> lattice_points(const Shape& shape, double spacing);
+// The same with the lattice axis-aligned in a frame F: points are returned in F, the shape
+// is tested at frame.rotate(p) (F → body).
+std::vector<Vec3> lattice_points(const Shape& shape, double spacing, const Quat& frame);
 
 }  // namespace crumble::pd

@@ -39,6 +39,7 @@ struct RunResult {
   int static_iterations = 0;
   double dt = 0;
   std::string outcome;
+  std::vector<double> alive_at_split;  // bond state when the split was first seen
 };
 
 // Lattice points within `radius` of point `centre` (the contact zone, seeds/000 Fig. 4).
@@ -121,6 +122,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
         if (pd::major_count(comp, o.min_child_fraction) >= 2) {
           r.split = true;
           r.outcome = "split";
+          r.alive_at_split = sys.alive();
           t_split = t;
           if (o.post_split_transits <= 0) break;
           continue;
@@ -156,9 +158,16 @@ double grain_critical_stretch(double gc, const pd::LpsMaterial& mat, double hori
   return pd::critical_stretch(gc, mat.bulk, mat.shear, horizon) * std::sqrt(d_e / o.d_ref);
 }
 
-Lattice grain_lattice(const Shape& shape, const PdOptions& o, double d_e) {
+// Rotation taking the z axis onto the unit vector a (the shortest one).
+Quat z_onto(const Vec3& a) {
+  if (a.z > 1 - 1e-12) return Quat{};
+  if (a.z < -1 + 1e-12) return Quat::from_axis_angle({1, 0, 0}, kPi);
+  return Quat::from_axis_angle(cross(Vec3{0, 0, 1}, a), std::acos(std::clamp(a.z, -1.0, 1.0)));
+}
+
+Lattice grain_lattice(const Shape& shape, const PdOptions& o, double d_e, const Quat& frame = Quat{}) {
   const double h = o.spacing_fraction * d_e;
-  auto pts = pd::lattice_points(shape, h);
+  auto pts = pd::lattice_points(shape, h, frame);
   double V = 0;
   if (o.volume_correction && !pts.empty()) V = shape.volume() / static_cast<double>(pts.size());
   if (pts.empty()) return Lattice{};
@@ -176,6 +185,7 @@ PdOptions pd_options_from_config(const Config& cfg) {
   o.spacing_fraction = cfg.number("spacing_fraction", o.spacing_fraction, 1e-3, 0.5);
   o.horizon_factor = cfg.number("horizon_factor", o.horizon_factor, 1.0, 8.0);
   o.partial_volumes = cfg.boolean("partial_volumes", o.partial_volumes);
+  o.align_lattice_to_load = cfg.choice("lattice_alignment", "load", {"load", "body"}) == "load";
   o.volume_correction = cfg.boolean("volume_correction", o.volume_correction);
   o.min_points = cfg.integer("min_points", o.min_points, 2, 100'000'000);
   o.d_ref = cfg.positive("d_ref", o.d_ref);
@@ -325,8 +335,19 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
   for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
   if (loads.size() < 2) return finish("no_load");
 
+  // Lattice frame: one lattice axis along the largest force (see PdOptions).
+  Quat frame;
+  if (o_.align_lattice_to_load) {
+    std::size_t big = 0;
+    for (std::size_t k = 1; k < loads.size(); ++k)
+      if (norm2(loads[k].force) > norm2(loads[big].force)) big = k;
+    frame = z_onto(normalized(loads[big].force));
+    const Quat to_frame = frame.conjugate();
+    for (auto& l : loads) l = {to_frame.rotate(l.point), to_frame.rotate(l.force)};
+  }
+
   const double d_e = g.shape->equivalent_diameter();
-  const Lattice L = grain_lattice(*g.shape, o_, d_e);
+  const Lattice L = grain_lattice(*g.shape, o_, d_e, frame);
   a.points = static_cast<long>(L.size());
   a.bonds = L.bonds();
   if (static_cast<long>(L.size()) < o_.min_points) return finish("too_few_points");
@@ -353,9 +374,16 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
   const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
   a.steps = r.steps;
   if (r.split) {
-    a.broken = true;
+    PointClusters pc = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
+    // A piece above the child size at the split may crumble into fines (< 3 %) during the
+    // post-split transits; the split itself then decides the pieces.
+    if (pc.clusters < 2 && !r.alive_at_split.empty())
+      pc = pd::point_clusters(L, r.alive_at_split, o_.min_child_fraction);
+    pc.frame = frame;  // lattice frame → body frame
     a.criterion = r.lambda * fmax;
-    a.fracture = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
+    if (pc.clusters < 2) return finish("split_into_fines");
+    a.broken = true;
+    a.fracture = std::move(pc);
   }
   return finish(r.outcome);
 }

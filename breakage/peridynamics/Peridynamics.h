@@ -55,6 +55,11 @@ struct PdOptions {
   double horizon_factor = 3.0002;   // "horizon_factor": δ / spacing
   bool partial_volumes = false;     // "partial_volumes": neighbour cells weighted by their volume inside δ
   bool volume_correction = true;    // "volume_correction": point volume = grain volume / points (else spacing³)
+  // "lattice_alignment": "load" builds the cubic lattice with one axis along the largest
+  // contact force, so a diametral load meets the lattice the same way whatever the grain's
+  // orientation (the LPS lattice is anisotropic: 179 N along an axis, 144–151 N along
+  // generic directions for the 2 mm reference grain); "body" fixes it to the body axes.
+  bool align_lattice_to_load = true;
   long min_points = 100;            // "min_points": fewer lattice points → outcome too_few_points
   // Critical stretch (eqs. 5, 16).
   double d_ref = 2e-3;  // "d_ref", m

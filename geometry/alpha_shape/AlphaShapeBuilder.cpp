@@ -24,6 +24,10 @@ void validate(const PointClusters& pc) {
   if (!(pc.spacing > 0) || !std::isfinite(pc.spacing))
     throw std::invalid_argument("PointClusters: spacing must be > 0 (got " + std::to_string(pc.spacing) + ")");
   if (pc.clusters < 1) throw std::invalid_argument("PointClusters: clusters must be >= 1");
+  const Quat& q = pc.frame;
+  const double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  if (!std::isfinite(qn) || std::abs(qn - 1) > 1e-9)
+    throw std::invalid_argument("PointClusters: frame must be a unit quaternion");
   if (pc.cluster.size() != n)
     throw std::invalid_argument("PointClusters: cluster has " + std::to_string(pc.cluster.size()) +
                                 " entries for " + std::to_string(n) + " points");
@@ -177,7 +181,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
     reports.push_back(std::move(r));
   }
   out.method = n_hull == 0 ? "alpha_shape" : (n_alpha == 0 ? "convex_hull" : "alpha_shape+convex_hull");
-  out.children = finish(std::move(meshes), parent.volume(), &reports);
+  out.children = finish(std::move(meshes), parent.volume(), &reports, pc.frame);
   if (rep) *rep = std::move(reports);
   return out;
 }
@@ -212,7 +216,8 @@ FragmentResult AlphaShapeBuilder::from_planes(const Shape& parent, const Cutting
 }
 
 std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, double target,
-                                                std::vector<ChildReport>* rep) const {
+                                                std::vector<ChildReport>* rep, const Quat& frame) const {
+  const bool rotate = !(frame.w == 1 && frame.x == 0 && frame.y == 0 && frame.z == 0);
   if (meshes.empty()) throw std::runtime_error("fragment builder 'alpha_shape': no child could be built");
   double sum = 0;
   std::vector<Vec3> centroid(meshes.size());
@@ -234,6 +239,8 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const Vec3 centre = opt_.scale_about_parent ? Vec3{} : centroid[i];
     for (auto& v : meshes[i].vertices) v = centre + (v - centre) * f;
+    if (rotate)
+      for (auto& v : meshes[i].vertices) v = frame.rotate(v);  // lattice frame → parent body frame
     Fragment fr;
     fr.shape = Shape::polyhedron(std::move(meshes[i]));
     fr.offset = -fr.shape->recentring();  // centroid in the parent frame before re-centring

@@ -73,7 +73,9 @@ class AlphaShapeBuilder final : public FragmentBuilder {
   FragmentResult from_planes(const Shape& parent, const CuttingSurfaces& cs, std::vector<ChildReport>* rep) const;
   // Rescales the meshes (parent frame) so that their volumes sum to `target` and wraps
   // them as Shape::polyhedron fragments.
-  std::vector<Fragment> finish(std::vector<TriMesh> meshes, double target, std::vector<ChildReport>* rep) const;
+  // `frame` rotates the meshes into the parent's body frame after scaling.
+  std::vector<Fragment> finish(std::vector<TriMesh> meshes, double target, std::vector<ChildReport>* rep,
+                               const Quat& frame = Quat{}) const;
 };
 
 // Registry factory: cfg is the scenario's "fragments" object (keys in the .cpp).
