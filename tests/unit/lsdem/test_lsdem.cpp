@@ -518,4 +518,24 @@ TEST(Lsdem, ShapeWalls) {
     const double travelled = dot(g[0].position, down_slope) - s0;
     EXPECT_NEAR(travelled / (v0 * T + 0.5 * a * T * T), 1.0, 0.03);
   }
+  {
+    // A rigid body given by a closed triangle mesh (crusher plates): a sphere rests on a
+    // slab read as a TriMesh and carries its weight into it.
+    LsdemSettings s;
+    s.kn = 1e7;
+    s.damping_ratio = 0.7;
+    s.global_damping = 1;
+    LsdemEngine e(s, context(3, {0, 0, -9.81}));
+    ShapeResolution res;
+    res.level_set_spacing = 0.05;
+    TriMesh slab;
+    for (int i = 0; i < 8; ++i) slab.vertices.push_back({(i & 1) ? 2.0 : -2.0, (i & 2) ? 2.0 : -2.0, (i & 4) ? 0.2 : -0.2});
+    slab.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                      {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    const int w = e.add_shape_wall(Shape::polyhedron(slab, res), {0, 0, -0.2});
+    e.add_grain(grain(0, sphere(1.0, 0.05, 4000), {0.1, -0.2, 1.0}));
+    for (int i = 0; i < 4000; ++i) e.step(e.max_stable_dt());
+    const double mg = 1000 * 4 * kPi / 3 * 9.81;
+    EXPECT_NEAR(e.shape_wall_force(w).z / -mg, 1.0, 0.01);
+  }
 }
