@@ -16,6 +16,7 @@
 
 #include "crumble_config.h"
 #include "geometry/LevelSetGrid.h"
+#include "scenarios/Checkpoint.h"
 #include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
@@ -47,19 +48,33 @@ Scenario load(const std::string& file, const std::vector<std::string>& sets, std
 }
 
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,
-            std::optional<std::uint64_t> seed, std::optional<int> threads, bool quiet) {
+            std::optional<std::uint64_t> seed, std::optional<int> threads, bool quiet, bool resume) {
   Scenario sc = load(file, sets, seed, threads);
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
-  write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
 
   Simulation& sim = *sc.sim;
   const auto t0 = std::chrono::steady_clock::now();
-  if (!quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-  const long settle_steps = build_packing(sim, sc.packing);
-  write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
-  if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
+  long settle_steps = 0, resumed_step = -1;
+  if (resume) {
+    // Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
+    Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
+    Container c = sc.packing.container;
+    c.height = cp.state.platen_position;
+    sim.set_container(c);
+    resumed_step = cp.state.step;
+    sim.resume(cp.state, std::move(cp.grains));
+    if (!quiet)
+      std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
+                << sim.grains().size() << " grains)\n";
+  } else {
+    write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
+    if (!quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
+    settle_steps = build_packing(sim, sc.packing);
+    write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
+    if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
+  }
 
   attach_standard_observers(sc, out);
   const auto t_loading = std::chrono::steady_clock::now();
@@ -70,6 +85,7 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   };
   RunSummary sum = sim.run(progress);
   sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
+  if (resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
   sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
@@ -128,7 +144,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sets;
   std::optional<std::uint64_t> seed;
   std::optional<int> threads;
-  bool quiet = false, print = false;
+  bool quiet = false, print = false, resume = false;
   double spacing = 0;
   long nodes = 0, bench_steps = 1000;
   int bench_threads = 1;
@@ -140,6 +156,7 @@ int main(int argc, char** argv) {
   run->add_option("--seed", seed, "random seed (overrides the scenario's)");
   run->add_option("--threads", threads, "threads (overrides the scenario's)")->check(CLI::Range(1, 1024));
   run->add_flag("--quiet", quiet, "no progress on stderr");
+  run->add_flag("--resume", resume, "continue from DIR/checkpoint.json (written when output.checkpoint_every > 0)");
 
   auto* val = app.add_subcommand("validate", "check a scenario without running it");
   val->add_option("scenario", file, "scenario JSON file")->required();
@@ -172,7 +189,7 @@ int main(int argc, char** argv) {
 
   try {
     for (const auto& p : plugins) load_plugin(p);
-    if (*run) return cmd_run(file, out, sets, seed, threads, quiet);
+    if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume);
     if (*val) return cmd_validate(file, sets, print);
     if (*lst) return cmd_list();
     if (*shp) {

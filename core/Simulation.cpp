@@ -77,6 +77,55 @@ GrainId Simulation::add_grain(Grain g) {
 
 void Simulation::add_observer(std::shared_ptr<Observer> o) { observers_.push_back(std::move(o)); }
 
+SimulationState Simulation::saved_state() const {
+  SimulationState s = resumed_ ? resumed_from_ : SimulationState{};
+  s.time = time_;
+  s.step = step_;
+  s.initial_height = initial_height_;
+  s.platen_position = engine_->platen_position();
+  s.removed_volume = removed_volume_;
+  s.removed_mass = removed_mass_;
+  s.events = events_;
+  s.analyses = analyses_;
+  s.fallbacks = fallbacks_;
+  s.dt_reductions = dt_reductions_;
+  s.next_id = next_id_;
+  s.schedule_last_stress = schedule_.last_stress();
+  s.max_platen_stress = max_platen_stress_;
+  if (!resumed_) {
+    s.grains_initial = initial_grains_;
+    s.mass_initial = initial_mass_;
+    s.void_ratio_initial = initial_void_ratio_;
+  }
+  return s;
+}
+
+void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
+  if (!grains_.empty()) throw std::logic_error("Simulation::resume: grains were already added");
+  if (container_.height <= 0) throw std::logic_error("Simulation::resume: set the container first");
+  for (auto& g : grains) {
+    if (!g.shape) throw std::invalid_argument("checkpoint grain " + std::to_string(g.id) + " has no shape");
+    if (g.id < 0 || g.id >= st.next_id)
+      throw std::invalid_argument("checkpoint grain id " + std::to_string(g.id) + " outside [0, next_id)");
+    engine_->add_grain(g);
+  }
+  grains_ = std::move(grains);
+  time_ = st.time;
+  step_ = st.step;
+  initial_height_ = st.initial_height;
+  removed_volume_ = st.removed_volume;
+  removed_mass_ = st.removed_mass;
+  events_ = st.events;
+  analyses_ = st.analyses;
+  fallbacks_ = st.fallbacks;
+  dt_reductions_ = st.dt_reductions;
+  next_id_ = st.next_id;
+  schedule_.set_last_stress(st.schedule_last_stress);
+  max_platen_stress_ = st.max_platen_stress;
+  resumed_from_ = st;
+  resumed_ = true;
+}
+
 double Simulation::area() const {
   return ctx_.dimension == 2 ? container_.lx : container_.lx * container_.ly;
 }
@@ -118,12 +167,23 @@ RunSummary Simulation::run(const Progress& progress) {
   const auto t_start = Clock::now();
   if (container_.height <= 0) throw std::logic_error("Simulation::run: no container set");
   RunSummary sum;
-  sum.grains_initial = grains_.size();
-  for (const auto& g : grains_) sum.mass_initial += g.mass(ctx_.materials[g.material].density);
-  initial_height_ = engine_->platen_position();
-
-  RunState st = state();
-  sum.void_ratio_initial = st.void_ratio;
+  RunState st;
+  if (resumed_) {
+    sum.grains_initial = resumed_from_.grains_initial;
+    sum.mass_initial = resumed_from_.mass_initial;
+    sum.void_ratio_initial = resumed_from_.void_ratio_initial;
+    st = state();
+  } else {
+    sum.grains_initial = grains_.size();
+    for (const auto& g : grains_) sum.mass_initial += g.mass(ctx_.materials[g.material].density);
+    initial_height_ = engine_->platen_position();
+    st = state();
+    sum.void_ratio_initial = st.void_ratio;
+  }
+  initial_grains_ = sum.grains_initial;
+  initial_mass_ = sum.mass_initial;
+  initial_void_ratio_ = sum.void_ratio_initial;
+  sum.max_platen_stress = max_platen_stress_;
   for (auto& o : observers_) o->on_start(*this, st);
 
   dt_ = time_step(0);
@@ -159,7 +219,7 @@ RunSummary Simulation::run(const Progress& progress) {
     if (!std::isfinite(st.platen_force) || !std::isfinite(st.platen_height))
       throw std::runtime_error("engine state became non-finite at step " + std::to_string(step_) +
                                " (t = " + std::to_string(time_) + " s): the time step is too large for this scene");
-    sum.max_platen_stress = std::max(sum.max_platen_stress, st.platen_stress);
+    sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
     if (model_->active() && schedule_.due(step_, st.platen_stress)) {
       check_breakage(st);
       st = state();

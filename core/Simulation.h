@@ -27,6 +27,8 @@ class Schedule {
   explicit Schedule(ScheduleSettings s) : s_(s) {}
   bool due(long step, double stress);
   const ScheduleSettings& settings() const { return s_; }
+  double last_stress() const { return last_stress_; }
+  void set_last_stress(double s) { last_stress_ = s; }
 
  private:
   ScheduleSettings s_;
@@ -49,6 +51,22 @@ struct SimulationSettings {
   int threads = 1;
 };
 
+// Everything besides the grains that a run needs to continue from a checkpoint. The
+// engine is rebuilt from the grains: contact history and solver warm starts start afresh,
+// and the platen starts at rest where it was.
+struct SimulationState {
+  double time = 0;
+  long step = 0;
+  double initial_height = 0;
+  double platen_position = 0;
+  double removed_volume = 0, removed_mass = 0;
+  long events = 0, analyses = 0, fallbacks = 0, dt_reductions = 0;
+  GrainId next_id = 0;
+  double schedule_last_stress = 0;
+  std::size_t grains_initial = 0;
+  double mass_initial = 0, void_ratio_initial = 0, max_platen_stress = 0;
+};
+
 class Simulation {
  public:
   Simulation(std::unique_ptr<Engine> engine, std::unique_ptr<BreakageModel> model,
@@ -61,6 +79,12 @@ class Simulation {
   // Adds a grain of the initial packing: assigns its id and samples its strength.
   GrainId add_grain(Grain g);
   void add_observer(std::shared_ptr<Observer> o);
+
+  // Checkpoint and resume: state() of the run so far (call sync_grains() for the grains),
+  // and, instead of add_grain(), the grains and state of a checkpoint (container set first).
+  SimulationState saved_state() const;
+  void resume(const SimulationState& st, std::vector<Grain> grains);
+  bool resumed() const { return resumed_; }
 
   using Progress = std::function<void(const RunState&, double fraction)>;
   RunSummary run(const Progress& progress = {});
@@ -105,6 +129,11 @@ class Simulation {
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   Timings timings_;
+  bool resumed_ = false;
+  SimulationState resumed_from_;
+  double max_platen_stress_ = 0;
+  std::size_t initial_grains_ = 0;
+  double initial_mass_ = 0, initial_void_ratio_ = 0;
 };
 
 }  // namespace crumble

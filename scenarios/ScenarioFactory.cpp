@@ -204,6 +204,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   sc.output.psd_at_stress = oc.numbers("psd_at_stress", {});
   sc.output.vtk_every = oc.integer("vtk_every", 0, 0);
   sc.output.vtk_final = oc.boolean("vtk_final", true);
+  sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
 
 

@@ -16,6 +16,7 @@ struct OutputSettings {
   std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
+  long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
 };
 
 struct Scenario {

@@ -11,6 +11,7 @@
 #include "scenarios/Packing.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/LevelSetGrid.h"
+#include "scenarios/Checkpoint.h"
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Writers.h"
 
@@ -54,16 +55,19 @@ class CrushingRecorder : public Observer {
 };
 
 // ncl.csv (void ratio and grain count against log stress), and the NCL slope and fractal
-// dimension for summary.json.
+// dimension for summary.json. Read from the finished series.csv (the SeriesWriter is
+// attached first), so a resumed run covers its whole history.
 class CompressionRecorder : public Observer {
  public:
   explicit CompressionRecorder(std::string dir) : dir_(std::move(dir)) {}
-  void on_sample(const Simulation&, const RunState& s) override {
-    stress_.push_back(s.platen_stress);
-    e_.push_back(s.void_ratio);
-    n_.push_back(s.grains);
-  }
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
+    const auto rows = read_csv(dir_ + "/series.csv");
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      if (rows[i].size() < 8) continue;
+      stress_.push_back(std::atof(rows[i][3].c_str()));
+      e_.push_back(std::atof(rows[i][6].c_str()));
+      n_.push_back(static_cast<std::size_t>(std::atol(rows[i][7].c_str())));
+    }
     // seeds/000 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
     // over the upper part of the loading (σ ≥ 0.3 σ_max).
     double smax = 0;
@@ -110,12 +114,16 @@ double perimeter(const std::vector<Vec3>& poly) {
 
 void attach_standard_observers(Scenario& sc, const std::string& out) {
   Simulation& sim = *sc.sim;
-  sim.add_observer(std::make_shared<SeriesWriter>(out));
-  sim.add_observer(std::make_shared<EventsWriter>(out));
-  sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress));
+  const bool resumed = sim.resumed();
+  const SimulationState st = sim.saved_state();
+  sim.add_observer(std::make_shared<SeriesWriter>(out, resumed ? st.step : -1));
+  sim.add_observer(std::make_shared<EventsWriter>(out, resumed ? st.time : -1.0));
+  sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
-    sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final));
+    sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));
+  if (sc.output.checkpoint_every > 0)
+    sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());
 }
 

@@ -30,10 +30,47 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
 }
 
-CsvStream::CsvStream(std::string path, const std::string& header) : path_(std::move(path)) {
+std::vector<std::vector<std::string>> read_csv(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    rows.push_back(std::move(cells));
+  }
+  return rows;
+}
+
+CsvStream::CsvStream(std::string path, const std::string& header, int keep_column, double keep_until)
+    : path_(std::move(path)) {
+  std::string kept;
+  if (keep_column >= 0) {
+    // Carry over the rows of the interrupted (or finished) earlier run up to the resume point.
+    const std::string from = fs::exists(path_ + ".part") ? path_ + ".part" : path_;
+    std::ifstream in(from);
+    std::string line;
+    bool first = true;
+    while (std::getline(in, line)) {
+      if (first) {
+        first = false;
+        continue;
+      }
+      std::stringstream ss(line);
+      std::string cell;
+      for (int k = 0; k <= keep_column && std::getline(ss, cell, ','); ++k) {
+      }
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      if (end != cell.c_str() && v <= keep_until) kept += line + "\n";
+    }
+  }
   out_.open(path_ + ".part", std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write '" + path_ + ".part'");
-  out_ << std::setprecision(10) << header << "\n";
+  out_ << std::setprecision(10) << header << "\n" << kept;
 }
 
 CsvStream::~CsvStream() {
@@ -56,10 +93,12 @@ void check_finite(double v, const char* what) {
 }
 }  // namespace
 
-SeriesWriter::SeriesWriter(const std::string& dir)
+SeriesWriter::SeriesWriter(const std::string& dir, long resume_step)
     : csv_(dir + "/series.csv",
            "time_s,step,dt_s,platen_stress_Pa,target_stress_Pa,axial_strain,void_ratio,grains,breakage_events,"
-           "analyses,platen_height_m,platen_force_N,floor_force_N") {}
+           "analyses,platen_height_m,platen_force_N,floor_force_N",
+           resume_step >= 0 ? 1 : -1, static_cast<double>(resume_step)),
+      last_step_(resume_step) {}
 
 void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
   if (s.step == last_step_) return;
@@ -73,11 +112,12 @@ void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
 
 void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
 
-EventsWriter::EventsWriter(const std::string& dir)
+EventsWriter::EventsWriter(const std::string& dir, double resume_time)
     : dir_(dir),
       csv_(dir + "/events.csv",
            "time_s,platen_stress_Pa,grain,diameter_m,generation,points,bonds,steps,wall_ms,outcome,criterion,"
-           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method") {}
+           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method",
+           resume_time >= 0 ? 0 : -1, resume_time) {}
 
 void EventsWriter::flush_pending() {
   if (!has_pending_) return;
@@ -109,14 +149,17 @@ void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
              << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.criterion << ','
              << e.analysis.load << ',' << e.children.size() << ',' << vols.str() << ',' << diams.str() << ','
              << e.removed_volume << ',' << e.fragment_method << '\n';
-  event_stress_.push_back(e.platen_stress);
 }
 
 void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) {
   flush_pending();
   csv_.finish();
+  // From the finished events.csv, so a resumed run counts the events before the resume.
   std::map<long, long> per;
-  for (double st : event_stress_) ++per[static_cast<long>(std::floor(st / 1e6))];
+  const auto rows = read_csv(dir_ + "/events.csv");
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (rows[i].size() > 12 && std::atol(rows[i][12].c_str()) > 0)
+      ++per[static_cast<long>(std::floor(std::atof(rows[i][1].c_str()) / 1e6))];
   std::ostringstream os;
   os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
   const long top = static_cast<long>(std::floor(std::max(0.0, s.platen_stress) / 1e6));
@@ -126,26 +169,42 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   write_file_atomic(dir_ + "/breakage_per_mpa.csv", os.str());
 }
 
-PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels) : dir_(dir), levels_(std::move(levels)) {
+PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress)
+    : dir_(dir), levels_(std::move(levels)) {
   std::sort(levels_.begin(), levels_.end());
+  if (resume_stress < 0) return;
+  // Keep the earlier tables (but its final one) and the sieves they used.
+  resumed_ = true;
+  const auto rows = read_csv(dir_ + "/psd.csv");
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i].size() < 4 || rows[i][0] == "final") continue;
+    rows_ += rows[i][0] + ',' + rows[i][1] + ',' + rows[i][2] + ',' + rows[i][3] + '\n';
+    d_max_ = std::max(d_max_, std::atof(rows[i][2].c_str()));
+  }
+  while (next_ < levels_.size() && levels_[next_] <= resume_stress) ++next_;
 }
 
 void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
+  if (resumed_ && d_max_ > 0) return;
   for (const auto& g : sim.grains()) d_max_ = std::max(d_max_, g.shape->equivalent_diameter());
   table(sim, s.platen_stress, "initial");
+}
+
+void PsdWriter::write() const {
+  write_file_atomic(dir_ + "/psd.csv", "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass\n" + rows_);
 }
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
   while (next_ < levels_.size() && s.platen_stress >= levels_[next_]) {
     table(sim, s.platen_stress, "level");
     ++next_;
+    write();  // each table on disk as soon as it exists
   }
 }
 
 void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
   table(sim, s.platen_stress, "final");
-  write_file_atomic(dir_ + "/psd.csv",
-                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass\n" + rows_);
+  write();
 }
 
 void PsdWriter::table(const Simulation& sim, double stress, const char* label) {
@@ -165,13 +224,34 @@ void PsdWriter::table(const Simulation& sim, double stress, const char* label) {
   rows_ += os.str();
 }
 
-VtkWriter::VtkWriter(const std::string& dir, long every, bool final_state)
+VtkWriter::VtkWriter(const std::string& dir, long every, bool final_state, long resume_step)
     : dir_(dir), every_(every), final_(final_state) {
   fs::create_directories(dir_ + "/vtk");
+  if (resume_step < 0) return;
+  // Keep the earlier snapshots up to the resume step (file names carry the step).
+  std::ifstream in(dir_ + "/grains.pvd");
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto t = line.find("timestep=\""), f = line.find("file=\"vtk/");
+    if (t == std::string::npos || f == std::string::npos) continue;
+    const double time = std::atof(line.c_str() + t + 10);
+    const std::string name = line.substr(f + 10, line.find('"', f + 10) - (f + 10));
+    const long step = std::atol(name.c_str() + 7);  // grains_NNNNNNNN.vtp
+    if (step <= resume_step) files_.push_back({time, name});
+  }
+  last_ = resume_step;
+}
+
+void VtkWriter::write_collection() const {
+  std::ostringstream os;
+  os << std::setprecision(12) << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (const auto& [t, f] : files_) os << "  <DataSet timestep=\"" << t << "\" file=\"vtk/" << f << "\"/>\n";
+  os << "</Collection>\n</VTKFile>\n";
+  write_file_atomic(dir_ + "/grains.pvd", os.str());
 }
 
 void VtkWriter::on_start(const Simulation& sim, const RunState& s) {
-  if (every_ > 0 || final_) snapshot(sim, s);
+  if ((every_ > 0 || final_) && s.step != last_) snapshot(sim, s);
 }
 
 void VtkWriter::on_sample(const Simulation& sim, const RunState& s) {
@@ -180,11 +260,7 @@ void VtkWriter::on_sample(const Simulation& sim, const RunState& s) {
 
 void VtkWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
   if (final_ && s.step != last_) snapshot(sim, s);
-  std::ostringstream os;
-  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-  for (const auto& [t, f] : files_) os << "  <DataSet timestep=\"" << t << "\" file=\"vtk/" << f << "\"/>\n";
-  os << "</Collection>\n</VTKFile>\n";
-  write_file_atomic(dir_ + "/grains.pvd", os.str());
+  write_collection();
 }
 
 void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
@@ -249,6 +325,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   std::snprintf(name, sizeof name, "grains_%08ld.vtp", s.step);
   write_file_atomic(dir_ + "/vtk/" + name, os.str());
   files_.push_back({s.time, name});
+  write_collection();
 }
 
 std::string format_progress(const RunState& s, double fraction, double elapsed) {

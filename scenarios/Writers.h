@@ -16,10 +16,12 @@ namespace crumble {
 // Write `content` to `path` atomically (temporary file + rename).
 void write_file_atomic(const std::string& path, const std::string& content);
 
-// An append-only CSV written to `<path>.part` and renamed to `path` when finished.
+// An append-only CSV written to `<path>.part` and renamed to `path` when finished. When a
+// run resumes, the rows of the earlier file (finished or .part) whose column `keep_column`
+// is at most `keep_until` are carried over first.
 class CsvStream {
  public:
-  CsvStream(std::string path, const std::string& header);
+  CsvStream(std::string path, const std::string& header, int keep_column = -1, double keep_until = 0);
   ~CsvStream();
   std::ofstream& row() { return out_; }
   void finish();
@@ -33,7 +35,8 @@ class CsvStream {
 // series.csv: time, stress, strain, void ratio, grain count, breakage events (+ more).
 class SeriesWriter : public Observer {
  public:
-  explicit SeriesWriter(const std::string& dir);
+  // resume_step >= 0: continue the series of a run resumed at that step.
+  explicit SeriesWriter(const std::string& dir, long resume_step = -1);
   void on_sample(const Simulation&, const RunState& s) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
@@ -46,7 +49,7 @@ class SeriesWriter : public Observer {
 // MPa of platen stress.
 class EventsWriter : public Observer {
  public:
-  explicit EventsWriter(const std::string& dir);
+  explicit EventsWriter(const std::string& dir, double resume_time = -1);
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
@@ -57,44 +60,51 @@ class EventsWriter : public Observer {
   CsvStream csv_;
   bool has_pending_ = false;
   AnalysisRecord pending_;
-  std::vector<double> event_stress_;
 };
 
 // psd.csv: particle size distribution by mass (removed fines counted in the finest bin)
 // when the platen stress first reaches each requested level, and at the end.
 class PsdWriter : public Observer {
  public:
-  PsdWriter(const std::string& dir, std::vector<double> levels);
+  // resume_stress >= 0: keep the tables of the earlier run up to that stress.
+  PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress = -1);
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
 
  private:
   void table(const Simulation& sim, double stress, const char* label);
+  void write() const;
   std::string dir_;
   std::vector<double> levels_;
   std::size_t next_ = 0;
   std::string rows_;
   double d_max_ = 0;
+  bool resumed_ = false;
 };
 
 // grains_NNNNNN.vtp snapshots (grain surfaces in world coordinates with id, generation,
 // diameter) and grains.pvd, for ParaView.
 class VtkWriter : public Observer {
  public:
-  VtkWriter(const std::string& dir, long every, bool final_state);
+  // resume_step >= 0: keep the snapshots of the earlier run up to that step.
+  VtkWriter(const std::string& dir, long every, bool final_state, long resume_step = -1);
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
 
  private:
   void snapshot(const Simulation& sim, const RunState& s);
+  void write_collection() const;
   std::string dir_;
   long every_;
   bool final_;
   long last_ = -1;
   std::vector<std::pair<double, std::string>> files_;
 };
+
+// Rows of a CSV file (header first), split at commas; empty when the file is missing.
+std::vector<std::vector<std::string>> read_csv(const std::string& path);
 
 // Progress with ETA on stderr.
 std::string format_progress(const RunState& s, double fraction, double elapsed_s);

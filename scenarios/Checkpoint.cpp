@@ -1,0 +1,175 @@
+#include "scenarios/Checkpoint.h"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "scenarios/ShapeSpec.h"
+#include "scenarios/Writers.h"
+
+namespace crumble {
+
+using Json = nlohmann::json;
+
+namespace {
+Json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
+Json quat(const Quat& q) { return {q.w, q.x, q.y, q.z}; }
+}  // namespace
+
+Json shape_to_json(const Shape& s) {
+  const auto& p = s.parameters();
+  Json j;
+  switch (s.kind()) {
+    case ShapeKind::Sphere: j = {{"type", "sphere"}, {"radius", p[0]}}; break;
+    case ShapeKind::Ellipsoid: j = {{"type", "ellipsoid"}, {"radii", {p[0], p[1], p[2]}}}; break;
+    case ShapeKind::Superellipsoid:
+      j = {{"type", "superellipsoid"}, {"radii", {p[0], p[1], p[2]}}, {"eps1", p[3]}, {"eps2", p[4]}};
+      break;
+    case ShapeKind::Box: j = {{"type", "box"}, {"half_extents", {p[0], p[1], p[2]}}}; break;
+    case ShapeKind::Polyhedron: {
+      const TriMesh& m = s.mesh();
+      Json v = Json::array(), t = Json::array();
+      for (const auto& x : m.vertices) v.push_back(vec(x));
+      for (const auto& x : m.triangles) t.push_back({x[0], x[1], x[2]});
+      j = {{"type", "polyhedron"}, {"vertices", v}, {"triangles", t}};
+      break;
+    }
+    case ShapeKind::Disk: j = {{"type", "disk"}, {"radius", p[0]}}; break;
+    case ShapeKind::Ellipse: j = {{"type", "ellipse"}, {"radii", {p[0], p[1]}}}; break;
+    case ShapeKind::Superellipse: j = {{"type", "superellipse"}, {"radii", {p[0], p[1]}}, {"eps", p[2]}}; break;
+    case ShapeKind::Polygon: {
+      Json v = Json::array();
+      for (const auto& x : s.outline()) v.push_back({x.x, x.y});
+      j = {{"type", "polygon"}, {"vertices", v}};
+      break;
+    }
+    case ShapeKind::LevelSet:
+      throw std::invalid_argument("a level-set shape cannot be written to a checkpoint");
+  }
+  const auto& r = s.resolution();
+  j["resolution"] = {{"mesh_subdivisions", r.mesh_subdivisions},
+                     {"level_set_spacing", r.level_set_spacing},
+                     {"surface_nodes", r.surface_nodes}};
+  return j;
+}
+
+Json checkpoint_json(Simulation& sim, const std::string& scenario) {
+  sim.sync_grains();
+  const SimulationState st = sim.saved_state();
+  Json j;
+  j["format"] = "crumble-checkpoint";
+  j["version"] = 1;
+  j["scenario"] = scenario;
+  j["dimension"] = sim.context().dimension;
+  j["state"] = {{"time", st.time},
+                {"step", st.step},
+                {"initial_height", st.initial_height},
+                {"platen_position", st.platen_position},
+                {"removed_volume", st.removed_volume},
+                {"removed_mass", st.removed_mass},
+                {"events", st.events},
+                {"analyses", st.analyses},
+                {"fallbacks", st.fallbacks},
+                {"dt_reductions", st.dt_reductions},
+                {"next_id", st.next_id},
+                {"schedule_last_stress", st.schedule_last_stress},
+                {"grains_initial", st.grains_initial},
+                {"mass_initial", st.mass_initial},
+                {"void_ratio_initial", st.void_ratio_initial},
+                {"max_platen_stress", st.max_platen_stress}};
+  // Shared shapes are written once.
+  std::map<const Shape*, std::size_t> index;
+  Json shapes = Json::array(), grains = Json::array();
+  for (const auto& g : sim.grains()) {
+    auto it = index.find(g.shape.get());
+    if (it == index.end()) {
+      it = index.emplace(g.shape.get(), shapes.size()).first;
+      shapes.push_back(shape_to_json(*g.shape));
+    }
+    grains.push_back({{"id", g.id},
+                      {"parent", g.parent},
+                      {"generation", g.generation},
+                      {"shape", it->second},
+                      {"material", g.material},
+                      {"position", vec(g.position)},
+                      {"orientation", quat(g.orientation)},
+                      {"velocity", vec(g.velocity)},
+                      {"angular_velocity", vec(g.angular_velocity)},
+                      {"strength", g.strength.value},
+                      {"threshold_force", g.strength.threshold_force},
+                      {"crush_count", g.crush_count}});
+  }
+  j["shapes"] = shapes;
+  j["grains"] = grains;
+  return j;
+}
+
+Checkpoint read_checkpoint(const std::string& path, const std::string& scenario, int dim) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, "cannot open checkpoint (was the run started with simulation.checkpoint_every?)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  Json doc = parse_json_text(ss.str(), path);
+  if (!doc.is_object()) throw ConfigError(path, "a checkpoint must be a JSON object");
+  Config c(doc);
+  if (c.string("format") != "crumble-checkpoint") c.fail("format", "not a crumble checkpoint");
+  c.integer("version", 1, 1, 1);
+  const std::string name = c.string("scenario");
+  if (name != scenario) c.fail("scenario", "checkpoint of scenario '" + name + "', not '" + scenario + "'");
+  c.integer("dimension", dim, dim, dim);
+  Checkpoint cp;
+  Config s = c.required_child("state");
+  auto& st = cp.state;
+  st.time = s.number("time", 0, 0);
+  st.step = s.integer("step", 0, 0);
+  st.initial_height = s.positive("initial_height");
+  st.platen_position = s.positive("platen_position");
+  st.removed_volume = s.number("removed_volume", 0, 0);
+  st.removed_mass = s.number("removed_mass", 0, 0);
+  st.events = s.integer("events", 0, 0);
+  st.analyses = s.integer("analyses", 0, 0);
+  st.fallbacks = s.integer("fallbacks", 0, 0);
+  st.dt_reductions = s.integer("dt_reductions", 0, 0);
+  st.next_id = s.integer("next_id", 0, 0);
+  st.schedule_last_stress = s.number("schedule_last_stress", 0);
+  st.grains_initial = static_cast<std::size_t>(s.integer("grains_initial", 0, 0));
+  st.mass_initial = s.number("mass_initial", 0, 0);
+  st.void_ratio_initial = s.number("void_ratio_initial", 0);
+  st.max_platen_stress = s.number("max_platen_stress", 0);
+  std::vector<Shape::Ptr> shapes;
+  for (auto& sc : c.children("shapes")) shapes.push_back(shape_from_config(sc, dim));
+  for (auto& gc : c.children("grains")) {
+    Grain g;
+    g.id = gc.integer("id", 0, 0);
+    g.parent = gc.integer("parent", -1, -1);
+    g.generation = static_cast<int>(gc.integer("generation", 0, 0));
+    const long si = gc.integer("shape", 0, 0, static_cast<long>(shapes.size()) - 1);
+    g.shape = shapes[static_cast<std::size_t>(si)];
+    g.material = static_cast<int>(gc.integer("material", 0, 0));
+    g.position = gc.vec3("position", {});
+    auto q = gc.numbers("orientation", {1, 0, 0, 0});
+    if (q.size() != 4) gc.fail("orientation", "expected [w, x, y, z]");
+    g.orientation = Quat{q[0], q[1], q[2], q[3]}.normalized();
+    g.velocity = gc.vec3("velocity", {});
+    g.angular_velocity = gc.vec3("angular_velocity", {});
+    g.strength.value = gc.number("strength", 0);
+    g.strength.threshold_force = gc.number("threshold_force", 0);
+    g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
+    cp.grains.push_back(std::move(g));
+  }
+  c.check_unknown();
+  return cp;
+}
+
+void CheckpointWriter::on_sample(const Simulation& sim, const RunState& s) {
+  if (every_ <= 0 || s.step - last_ < every_) return;
+  last_ = s.step;
+  write_file_atomic(dir_ + "/checkpoint.json", checkpoint_json(const_cast<Simulation&>(sim), scenario_).dump() + "\n");
+}
+
+void CheckpointWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
+  if (every_ <= 0) return;
+  write_file_atomic(dir_ + "/checkpoint.json", checkpoint_json(const_cast<Simulation&>(sim), scenario_).dump() + "\n");
+}
+
+}  // namespace crumble
