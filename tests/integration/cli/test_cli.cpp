@@ -29,8 +29,11 @@ Result run(const std::string& args) {
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
 }
 
+// ctest runs the tests of this program in parallel processes: every file a test writes
+// carries the test's name.
 std::string scenario_file(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "crumble_cli_test";
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::temp_directory_path() / "crumble_cli_test" / (info ? info->name() : "any");
   fs::create_directories(dir);
   const fs::path f = dir / name;
   std::ofstream(f) << text;
