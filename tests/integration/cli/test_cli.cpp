@@ -1,36 +1,22 @@
 // The command line end to end: exit statuses and error messages for every bad-input class.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "tests/support/CliRunner.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string output;
-};
+using Result = crumble::testing_support::CliResult;
+Result run(const std::string& args) { return crumble::testing_support::run_cli(args); }
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(CRUMBLE_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (p && fgets(buf, sizeof buf, p)) out += buf;
-  const int st = p ? pclose(p) : -1;
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-// ctest runs the tests of this program in parallel processes: every file a test writes
-// carries the test's name.
 std::string scenario_file(const std::string& name, const std::string& text) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   const fs::path dir = fs::temp_directory_path() / "crumble_cli_test" / (info ? info->name() : "any");
@@ -129,12 +115,7 @@ TEST(Cli, RunWritesEveryOutput) {
     EXPECT_NE(s.find(std::string("\"") + key + "\""), std::string::npos) << key;
 }
 
-namespace {
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-}  // namespace
+using crumble::testing_support::slurp;
 
 TEST(Cli, SameSeedSameSummary) {
   // Two runs of a small rigid Bullet oedometer with one thread: summary.json identical but

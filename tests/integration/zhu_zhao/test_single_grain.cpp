@@ -2,16 +2,15 @@
 // alpha shapes rebuild the pieces, the pieces go back into Bullet.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "crumble_config.h"
+#include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
@@ -20,14 +19,10 @@ namespace {
 Json run_scenario(const std::string& name, const std::string& sets) {
   const fs::path out = fs::temp_directory_path() / ("crumble_" + name);
   fs::remove_all(out);
-  const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + CRUMBLE_SOURCE_DIR + "/scenarios/" + name +
-                          ".json --quiet --out " + out.string() + " " + sets + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string log;
-  char buf[4096];
-  while (p && fgets(buf, sizeof buf, p)) log += buf;
-  const int st = p ? pclose(p) : -1;
-  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << cmd << "\n" << log;
+  const std::string args = std::string("run ") + CRUMBLE_SOURCE_DIR + "/scenarios/" + name + ".json --quiet --out " +
+                           out.string() + " " + sets;
+  const auto r = crumble::testing_support::run_cli(args);
+  EXPECT_EQ(r.status, 0) << args << "\n" << r.output;
   std::ifstream in(out / "summary.json");
   if (!in) return Json::object();
   return Json::parse(in);

@@ -8,10 +8,8 @@
 // Regenerate after an intended change: CRUMBLE_REGENERATE=1 ./tests/test_runs
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "crumble_config.h"
+#include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
@@ -33,14 +32,10 @@ struct Case {
 Json run_case(const Case& c) {
   const fs::path out = fs::temp_directory_path() / ("crumble_regression_" + c.name);
   fs::remove_all(out);
-  const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + CRUMBLE_SOURCE_DIR + "/scenarios/" + c.scenario +
-                          " --quiet --threads 1 --out " + out.string() + " " + c.sets + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string log;
-  char buf[4096];
-  while (p && fgets(buf, sizeof buf, p)) log += buf;
-  const int st = p ? pclose(p) : -1;
-  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << cmd << "\n" << log;
+  const std::string args = std::string("run ") + CRUMBLE_SOURCE_DIR + "/scenarios/" + c.scenario +
+                           " --quiet --threads 1 --out " + out.string() + " " + c.sets;
+  const auto r = crumble::testing_support::run_cli(args);
+  EXPECT_EQ(r.status, 0) << args << "\n" << r.output;
   std::ifstream in(out / "summary.json");
   return in ? Json::parse(in) : Json::object();
 }

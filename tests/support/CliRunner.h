@@ -1,0 +1,34 @@
+// Runs the crumble binary (CRUMBLE_BINARY, set by tests/CMakeLists.txt) from a test.
+#pragma once
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace crumble::testing_support {
+
+struct CliResult {
+  int status;          // exit status, -1 when the process did not exit normally
+  std::string output;  // stdout and stderr together
+};
+
+// `args` go after the binary's path, through the shell.
+inline CliResult run_cli(const std::string& args) {
+  const std::string cmd = std::string(CRUMBLE_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int st = p ? pclose(p) : -1;
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+}  // namespace crumble::testing_support
