@@ -8,7 +8,9 @@
 // Exit status: 0 success, 2 bad input (scenario, option, mesh), 1 failure while running.
 #include <CLI/CLI.hpp>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -29,6 +31,9 @@ using namespace crumble;
 using Json = nlohmann::json;
 
 namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop.store(true); }
 
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -55,6 +60,9 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
 
   Simulation& sim = *sc.sim;
+  // Ctrl-C / SIGTERM: finish the current step, then write every output and the checkpoint.
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
   const auto t0 = std::chrono::steady_clock::now();
   long settle_steps = 0, resumed_step = -1;
   if (resume) {
@@ -71,12 +79,13 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   } else {
     write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
     if (!quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-    settle_steps = build_packing(sim, sc.packing);
+    settle_steps = build_packing(sim, sc.packing, &g_stop);
     write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
     if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
   }
 
   attach_standard_observers(sc, out);
+  sim.set_stop_flag(&g_stop);
   const auto t_loading = std::chrono::steady_clock::now();
   auto progress = [&](const RunState& s, double f) {
     if (quiet) return;
@@ -89,6 +98,9 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
+  if (sum.interrupted)
+    std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
+              << (sc.output.checkpoint_every > 0 ? ", resume with --resume\n" : "\n");
   if (!quiet)
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
               << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n";

@@ -64,6 +64,7 @@ struct RunSummary {
   double mass_initial = 0, mass_final = 0, mass_removed = 0;
   double void_ratio_initial = 0, void_ratio_final = 0;
   double max_platen_stress = 0;
+  bool interrupted = false;  // stopped early by a signal
   Timings timings;
   std::map<std::string, double> extra;  // method-specific figures
   std::map<std::string, std::vector<double>> extra_arrays;

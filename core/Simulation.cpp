@@ -197,6 +197,10 @@ RunSummary Simulation::run(const Progress& progress) {
   while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
     if (settings_.max_steps > 0 && step_ >= settings_.max_steps) break;
     if (settings_.stop_after_breakage_events > 0 && events_ >= settings_.stop_after_breakage_events) break;
+    if (stop_ && stop_->load()) {
+      sum.interrupted = true;
+      break;
+    }
     double dt = time_step(std::max(st.platen_stress, 0.0));
     const double bound = engine_->max_stable_dt();
     if (dt > bound) {

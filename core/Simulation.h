@@ -1,6 +1,7 @@
 // The one loop of DESIGN.md: load, step, check breakage on schedule, replace broken
 // grains by their fragments, notify observers.
 #pragma once
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <span>
@@ -86,6 +87,10 @@ class Simulation {
   void resume(const SimulationState& st, std::vector<Grain> grains);
   bool resumed() const { return resumed_; }
 
+  // A flag (e.g. set by SIGINT/SIGTERM) that ends the loop after the current step; the run
+  // then finishes normally (outputs, checkpoint) and reports itself as interrupted.
+  void set_stop_flag(const std::atomic<bool>* flag) { stop_ = flag; }
+
   using Progress = std::function<void(const RunState&, double fraction)>;
   RunSummary run(const Progress& progress = {});
 
@@ -130,6 +135,7 @@ class Simulation {
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   Timings timings_;
   bool resumed_ = false;
+  const std::atomic<bool>* stop_ = nullptr;
   SimulationState resumed_from_;
   double max_platen_stress_ = 0;
   std::size_t initial_grains_ = 0;

@@ -264,7 +264,7 @@ PackingSpec scene_from_config(const Config& sc, int dim) {
   return spec;
 }
 
-long build_packing(Simulation& sim, const PackingSpec& spec) {
+long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
   sim.set_container(spec.container);
   for (const auto& pg : spec.grains) {
     Grain g;
@@ -289,7 +289,7 @@ long build_packing(Simulation& sim, const PackingSpec& spec) {
   const long window = std::max(1L, std::lround(ss.window / dt));
   const long max_steps = std::max(window, std::lround(ss.max_time / dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
-  while (steps < max_steps) {
+  while (steps < max_steps && !(stop && stop->load())) {
     e.step(dt);
     ++steps;
     if (steps % window == 0) {

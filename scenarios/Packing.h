@@ -2,6 +2,7 @@
 // stable, seeds/000 §5), listed explicitly, or loaded from a packing.json written by an
 // earlier run, so different engines and models start from the identical packing.
 #pragma once
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -58,7 +59,8 @@ PackingSpec scene_from_config(const Config& scene, int dimension);
 
 // Adds the grains to the simulation and, for generated clouds, pushes the platen down until
 // the packing is stable (the initial state of the run). Returns the settling steps.
-long build_packing(Simulation& sim, const PackingSpec& spec);
+// `stop` (a signal flag) ends the settling early.
+long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop = nullptr);
 
 // packing.json of the current grains (shape specs, poses) for reuse by another scenario.
 nlohmann::json packing_to_json(const Simulation& sim, const PackingSpec& spec);

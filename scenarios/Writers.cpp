@@ -108,6 +108,7 @@ void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
   csv_.row() << s.time << ',' << s.step << ',' << s.dt << ',' << s.platen_stress << ',' << s.target_stress << ','
              << s.axial_strain << ',' << s.void_ratio << ',' << s.grains << ',' << s.breakage_events << ','
              << s.analyses << ',' << s.platen_height << ',' << s.platen_force << ',' << s.floor_force << '\n';
+  csv_.row().flush();  // a killed run keeps every row written so far
 }
 
 void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
@@ -149,6 +150,7 @@ void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
              << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.criterion << ','
              << e.analysis.load << ',' << e.children.size() << ',' << vols.str() << ',' << diams.str() << ','
              << e.removed_volume << ',' << e.fragment_method << '\n';
+  csv_.row().flush();
 }
 
 void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) {
@@ -364,6 +366,7 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   j["void_ratio_initial"] = s.void_ratio_initial;
   j["void_ratio_final"] = s.void_ratio_final;
   j["max_platen_stress_Pa"] = s.max_platen_stress;
+  if (s.interrupted) j["interrupted"] = true;
   j["time_breakdown_s"] = {{"engine", s.timings.engine},     {"contacts", s.timings.contacts},
                            {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
                            {"fragments", s.timings.fragments}, {"output", s.timings.observers}};

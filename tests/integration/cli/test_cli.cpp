@@ -249,3 +249,19 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   expect_input_error("run " + scen + " --out " + (base / "nothing_here").string() + sets + " --resume",
                      "checkpoint");
 }
+
+TEST(Cli, SignalStopsTheRunWithEveryOutput) {
+  // SIGTERM ends the loop after the current step: exit 0, all files, a checkpoint to resume.
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "interrupted";
+  fs::remove_all(out);
+  const Result r = run("--version >/dev/null; timeout --preserve-status -s TERM 4 " + std::string(CRUMBLE_BINARY) +
+                       " run " + CRUMBLE_SOURCE_DIR + "/scenarios/oedometer_rigid_quick.json --quiet --out " +
+                       out.string() + " --set loading.ramp_time=100 --set output.checkpoint_every=20 --set packing.count=30" +
+                       " --set container.lx=6e-3 --set container.ly=6e-3 --set engine.solver_iterations=200");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("interrupted at step"), std::string::npos) << r.output;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(s["interrupted"], true);
+  EXPECT_TRUE(fs::exists(out / "series.csv"));
+  EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
+}
