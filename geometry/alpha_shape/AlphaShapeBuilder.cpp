@@ -1,17 +1,43 @@
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 
+#include "geometry/ConvexHull.h"
 #include "geometry/MeshClip.h"
 
 namespace crumble {
 
 namespace {
+
+// Vertices in lexicographic order, each triangle starting at its smallest index, triangles
+// sorted: a canonical form of a mesh that keeps its orientation.
+void canonicalize(TriMesh& m) {
+  std::vector<int> order(m.vertices.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const Vec3 &p = m.vertices[a], &q = m.vertices[b];
+    return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z);
+  });
+  std::vector<int> rank(order.size());
+  std::vector<Vec3> v(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    rank[order[i]] = static_cast<int>(i);
+    v[i] = m.vertices[order[i]];
+  }
+  m.vertices = std::move(v);
+  for (auto& t : m.triangles) {
+    t = {rank[t[0]], rank[t[1]], rank[t[2]]};
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};  // rotate: orientation kept
+  }
+  std::sort(m.triangles.begin(), m.triangles.end());
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -57,7 +83,7 @@ TriMesh cube_hull(const std::vector<Vec3>& pts, double spacing) {
   const double h = 0.5 * spacing;
   for (const auto& p : pts)
     for (int k = 0; k < 8; ++k) corners.push_back(p + Vec3{(k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h});
-  return cgal_convex_hull(corners, spacing);
+  return convex_hull(corners);  // geometry/ConvexHull: deterministic, allocation-order free
 }
 
 }  // namespace
@@ -141,7 +167,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
       r.alpha_steps = a.steps;
       if (a.ok) {
         try {
-          const double v_hull = polyhedron_mass_properties(cgal_convex_hull(boundary[c], pc.spacing)).volume;
+          const double v_hull = polyhedron_mass_properties(convex_hull(boundary[c])).volume;
           r.convexity = polyhedron_mass_properties(a.mesh).volume / v_hull;
         } catch (const std::invalid_argument&) {
           r.convexity = 1;  // cannot happen for a closed alpha shape; treat as convex
@@ -164,7 +190,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
     }
     if (!have) {
       try {
-        mesh = cgal_convex_hull(boundary[c].size() >= 4 ? boundary[c] : material[c], pc.spacing);
+        mesh = convex_hull(boundary[c].size() >= 4 ? boundary[c] : material[c]);
       } catch (const std::invalid_argument& e) {
         // Flat or tiny cluster: hull of the points' lattice cells.
         std::vector<Vec3> pts = material[c];
@@ -219,6 +245,9 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
                                                 std::vector<ChildReport>* rep, const Quat& frame) const {
   const bool rotate = !(frame.w == 1 && frame.x == 0 && frame.y == 0 && frame.z == 0);
   if (meshes.empty()) throw std::runtime_error("fragment builder 'alpha_shape': no child could be built");
+  // CGAL walks its cells in an order that follows heap addresses; sort each mesh so the
+  // children (and every sum over their vertices) do not depend on the allocator's history.
+  for (auto& m : meshes) canonicalize(m);
   double sum = 0;
   std::vector<Vec3> centroid(meshes.size());
   for (std::size_t i = 0; i < meshes.size(); ++i) {

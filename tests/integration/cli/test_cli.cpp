@@ -265,3 +265,24 @@ TEST(Cli, SignalStopsTheRunWithEveryOutput) {
   EXPECT_TRUE(fs::exists(out / "series.csv"));
   EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
 }
+
+TEST(Cli, CrushableRunDoesNotDependOnThreads) {
+  // Breakage analyses run one grain per thread; the run must not depend on how many.
+  const fs::path base = fs::temp_directory_path() / "crumble_cli_test";
+  const std::string sets =
+      " --quiet --set packing.count=40 --set container.lx=6e-3 --set container.ly=6e-3 --set loading.max_stress=5e6"
+      " --set loading.ramp_time=0.025 --set breakage.spacing_fraction=0.1 --set output.vtk_every=0";
+  std::string sums[2];
+  for (int t = 1; t <= 2; ++t) {
+    const fs::path out = base / ("threads" + std::to_string(t));
+    fs::remove_all(out);
+    const Result r = run("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_zhu_zhao_quick.json --out " +
+                         out.string() + sets + " --threads " + std::to_string(t));
+    ASSERT_EQ(r.status, 0) << r.output;
+    auto j = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_GT(j["breakage_events"].get<long>(), 0);
+    for (const char* k : {"wall_seconds", "time_breakdown_s", "threads"}) j.erase(k);
+    sums[t - 1] = j.dump();
+  }
+  EXPECT_EQ(sums[0], sums[1]);
+}
