@@ -346,31 +346,6 @@ AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const A
   return res;
 }
 
-TriMesh cgal_convex_hull(const std::vector<Vec3>& points, double lattice_spacing) {
-  check_points(points, "cgal_convex_hull");
-  const Working w = working_coordinates(points, lattice_spacing);
-  const std::vector<Point>& pts = w.pts;
-  // Flat clouds: convex_hull_3 would return a 2D polygon.
-  const Point a = pts.front();
-  auto jt = std::find_if(pts.begin(), pts.end(), [&](const Point& p) { return p != a; });
-  if (jt == pts.end()) throw std::invalid_argument("cgal_convex_hull: all points coincide");
-  auto kt = std::find_if(pts.begin(), pts.end(), [&](const Point& p) { return !CGAL::collinear(a, *jt, p); });
-  if (kt == pts.end()) throw std::invalid_argument("cgal_convex_hull: the points are collinear");
-  auto lt = std::find_if(pts.begin(), pts.end(), [&](const Point& p) { return !CGAL::coplanar(a, *jt, *kt, p); });
-  if (lt == pts.end()) throw std::invalid_argument("cgal_convex_hull: the points are coplanar");
-  cgal::Mesh sm;
-  CGAL::convex_hull_3(pts.begin(), pts.end(), sm);
-  TriMesh mesh = cgal::to_trimesh(sm);
-  if (w.lattice) {  // back to the caller's coordinates
-    std::map<std::array<double, 3>, int> index;
-    for (std::size_t i = 0; i < pts.size(); ++i) index.emplace(std::array<double, 3>{pts[i].x(), pts[i].y(), pts[i].z()}, i);
-    for (auto& v : mesh.vertices) v = points[index.at({v.x, v.y, v.z})];
-  }
-  if (!(polyhedron_mass_properties(mesh).volume > 0))
-    throw std::logic_error("cgal_convex_hull: the hull has no positive volume");
-  return mesh;
-}
-
 bool mesh_self_intersects(const TriMesh& mesh) {
   const cgal::Mesh sm = cgal::to_surface_mesh(mesh);
   return PMP::does_self_intersect(sm);

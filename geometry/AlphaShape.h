@@ -47,12 +47,6 @@ struct AlphaShapeResult {
 // Throws std::invalid_argument for fewer than 4 points, non-finite points or bad options.
 AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const AlphaShapeOptions& opt);
 
-// Convex hull (CGAL convex_hull_3) as a closed, outward-oriented triangle mesh of the
-// extreme points. With lattice_spacing > 0, points on that lattice (and bond midpoints)
-// are handled in exact lattice coordinates, as in alpha_shape_polyhedron. Throws
-// std::invalid_argument for fewer than 4 points or a flat cloud.
-TriMesh cgal_convex_hull(const std::vector<Vec3>& points, double lattice_spacing = 0);
-
 // True if two non-adjacent triangles of the mesh intersect (CGAL
 // Polygon_mesh_processing::does_self_intersect, exact predicates).
 bool mesh_self_intersects(const TriMesh& mesh);

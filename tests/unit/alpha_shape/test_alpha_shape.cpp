@@ -13,6 +13,7 @@
 
 #include "Lattice.h"
 #include "geometry/AlphaShape.h"
+#include "geometry/ConvexHull.h"
 #include "geometry/MeshClip.h"
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #include "scenarios/Registry.h"
@@ -24,7 +25,7 @@ namespace {
 constexpr double kD = 2e-3;              // 2 mm grain (seeds/000 reference)
 constexpr double kSpacing = 0.062 * kD;  // seeds/000 §2.1
 
-double hull_volume(const TriMesh& m) { return polyhedron_mass_properties(cgal_convex_hull(m.vertices)).volume; }
+double hull_volume(const TriMesh& m) { return polyhedron_mass_properties(convex_hull(m.vertices)).volume; }
 
 // Every structural property the Simulation and the engines rely on.
 void expect_valid_child(const Fragment& f) {
@@ -475,7 +476,7 @@ TEST(AlphaShapeBuilder, RejectsBadInput) {
   cs.planes.push_back({{0, 0, 0}, 0.0});
   EXPECT_THROW(b.build(*parent, cs), std::invalid_argument);
   EXPECT_THROW(alpha_shape_polyhedron({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, AlphaShapeOptions{1.0}), std::invalid_argument);
-  EXPECT_THROW(cgal_convex_hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}), std::invalid_argument);
+  EXPECT_THROW(convex_hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}), std::invalid_argument);
 }
 
 TEST(AlphaShapeBuilder, RegistryAndConfig) {
