@@ -286,3 +286,14 @@ TEST(Cli, CrushableRunDoesNotDependOnThreads) {
   }
   EXPECT_EQ(sums[0], sums[1]);
 }
+
+TEST(Cli, EveryShippedScenarioValidates) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(CRUMBLE_SOURCE_DIR) / "scenarios")) {
+    if (e.path().extension() != ".json") continue;
+    const Result r = run("validate " + e.path().string());
+    EXPECT_EQ(r.status, 0) << e.path() << "\n" << r.output;
+    ++n;
+  }
+  EXPECT_GE(n, 7);
+}
