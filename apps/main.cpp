@@ -34,6 +34,8 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop.store(true); }
+// Exit status of a run ended early by SIGINT/SIGTERM before it had anything to resume.
+constexpr int kExitInterrupted = 130;
 
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -65,6 +67,7 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   std::signal(SIGTERM, on_signal);
   const auto t0 = std::chrono::steady_clock::now();
   long settle_steps = 0, resumed_step = -1;
+  bool packing_settled = true;
   if (resume) {
     // Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
     Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
@@ -79,7 +82,19 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   } else {
     write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
     if (!quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-    settle_steps = build_packing(sim, sc.packing, &g_stop);
+    const SettleResult settled = build_packing(sim, sc.packing, &g_stop);
+    settle_steps = settled.steps;
+    if (settled.interrupted) {
+      // An unsettled packing is not the start of this run: nothing is written that a
+      // later --resume or another scenario could take for it.
+      std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
+                << " steps); no packing.json or checkpoint was written: run the scenario again (without --resume)\n";
+      return kExitInterrupted;
+    }
+    if (!settled.converged)
+      std::cerr << "crumble: warning: the packing did not come to rest within packing.settle.max_time ("
+                << settled.steps << " steps); the run starts from it anyway (summary.json: packing_settled false)\n";
+    packing_settled = settled.converged;
     write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
     if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
   }
@@ -94,6 +109,7 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   };
   RunSummary sum = sim.run(progress);
   sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
+  if (!resume) sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
   if (resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
   sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);

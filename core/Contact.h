@@ -16,6 +16,9 @@ struct Contact {
   Vec3 point;
   Vec3 normal;
   Vec3 force;
+  // Deepest interpenetration of the two surfaces (m, >= 0) as the engine sees it; the
+  // Simulation's guards compare it with the smaller grain's size.
+  double overlap = 0;
   bool is_wall() const { return wall >= 0; }
 };
 

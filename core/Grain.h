@@ -29,6 +29,9 @@ struct StrengthState {
 struct Grain {
   GrainId id = -1;
   GrainId parent = -1;
+  // The grain of the initial packing this one descends from (itself for generation 0):
+  // fragments of one grain start where their parent was and may overlap each other.
+  GrainId origin = -1;
   int generation = 0;
   Shape::Ptr shape;
   int material = 0;

@@ -29,6 +29,7 @@ struct RunState {
 
 struct AnalysisRecord {
   double time = 0;
+  long step = 0;
   double platen_stress = 0;
   GrainId grain = -1;
   double diameter = 0;
@@ -38,6 +39,7 @@ struct AnalysisRecord {
 
 struct BreakageEvent {
   double time = 0;
+  long step = 0;
   double platen_stress = 0;
   GrainId parent = -1;
   double parent_diameter = 0;
@@ -52,7 +54,7 @@ struct BreakageEvent {
 };
 
 struct Timings {
-  double engine = 0, contacts = 0, screening = 0, analyses = 0, fragments = 0, observers = 0;
+  double engine = 0, contacts = 0, screening = 0, analyses = 0, fragments = 0, observers = 0, guards = 0;
 };
 
 struct RunSummary {

@@ -68,8 +68,11 @@ GrainId Simulation::add_grain(Grain g) {
   if (g.material < 0 || g.material >= static_cast<int>(ctx_.materials.size()))
     throw std::invalid_argument("grain material index out of range");
   g.id = next_id_++;
+  g.origin = g.id;
   Rng r = rng_.derive(static_cast<std::uint64_t>(g.id));
   model_->assign_strength(g, ctx_.materials[g.material], r);
+  // The kinetic energy a grain starts with counts as energy put in (guards).
+  energy_in_ += kinetic_energy(std::span<const Grain>(&g, 1), ctx_.materials, ctx_.dimension);
   engine_->add_grain(g);
   grains_.push_back(std::move(g));
   return grains_.back().id;
@@ -92,6 +95,7 @@ SimulationState Simulation::saved_state() const {
   s.next_id = next_id_;
   s.schedule_last_stress = schedule_.last_stress();
   s.max_platen_stress = max_platen_stress_;
+  s.energy_in = energy_in_;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -122,6 +126,7 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   next_id_ = st.next_id;
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
+  energy_in_ = st.energy_in;
   resumed_from_ = st;
   resumed_ = true;
 }
@@ -143,6 +148,30 @@ double Simulation::time_step(double stress) const {
 }
 
 void Simulation::sync_grains() { engine_->read_state(grains_); }
+
+void Simulation::check_guards(const char* phase, double dt, bool full) {
+  GuardContext at;
+  at.phase = phase;
+  at.step = step_;
+  at.time = time_;
+  at.dt = dt;
+  at.engine = engine_->name();
+  const RunState st = state();
+  at.platen_stress = st.platen_stress;
+  check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
+  if (!full || !settings_.guards.enabled) return;
+  sync_grains();
+  // Budget: what entered so far, plus every grain's weight falling the container's height
+  // (at least 1 m/s² so that a scene without gravity still has a scale).
+  double mass = 0;
+  for (const auto& g : grains_) mass += g.mass(ctx_.materials[g.material].density);
+  at.energy_budget = energy_in_ + mass * std::max(norm(ctx_.gravity), 1.0) * std::max(initial_height_, container_.height);
+  const std::vector<Contact> cs = settings_.guards.max_overlap_fraction > 0 ? engine_->contacts() : std::vector<Contact>{};
+  const GuardReading r =
+      check_invariants(settings_.guards, at, container_, ctx_.dimension, st.platen_height, grains_, ctx_.materials, cs);
+  guard_max_.max_overlap_fraction = std::max(guard_max_.max_overlap_fraction, r.max_overlap_fraction);
+  guard_max_.energy_ratio = std::max(guard_max_.energy_ratio, r.energy_ratio);
+}
 
 RunState Simulation::state() const {
   RunState s;
@@ -215,14 +244,21 @@ RunSummary Simulation::run(const Progress& progress) {
     dt_ = dt;
     engine_->set_platen(loading_.command(time_, area(), initial_height_));
     auto t0 = Clock::now();
+    const double z_before = st.platen_height;
     engine_->step(dt);
     timings_.engine += seconds_since(t0);
     time_ += dt;
     ++step_;
     st = state();
-    if (!std::isfinite(st.platen_force) || !std::isfinite(st.platen_height))
-      throw std::runtime_error("engine state became non-finite at step " + std::to_string(step_) +
-                               " (t = " + std::to_string(time_) + " s): the time step is too large for this scene");
+    account_platen_work(st.platen_force, st.platen_height - z_before);
+    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
+      t0 = Clock::now();
+      check_guards("loading", dt, true);
+      timings_.guards += seconds_since(t0);
+    } else {
+      GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->name(), 0};
+      check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
+    }
     sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
     if (model_->active() && schedule_.due(step_, st.platen_stress)) {
       check_breakage(st);
@@ -238,6 +274,7 @@ RunSummary Simulation::run(const Progress& progress) {
       progress(st, loading_.progress(time_, st.platen_stress, st.axial_strain));
     }
   }
+  check_guards("loading", dt_, true);
   st = state();
   for (auto& o : observers_) o->on_sample(*this, st);
   sync_grains();
@@ -251,6 +288,8 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.analyses = analyses_;
   sum.fragment_fallbacks = fallbacks_;
   sum.dt_reductions = dt_reductions_;
+  sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
+  sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   auto t0 = Clock::now();
   for (auto& o : observers_) o->on_finish(*this, st, sum);
   timings_.observers += seconds_since(t0);
@@ -321,7 +360,7 @@ void Simulation::check_breakage(const RunState& st) {
   for (long k = 0; k < n; ++k) {
     const Grain& parent = grains_[candidates[k]];
     ++analyses_;
-    AnalysisRecord rec{time_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
+    AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
                        results[k]};
     rec.analysis.fracture.reset();
     for (auto& o : observers_) o->on_analysis(*this, rec);
@@ -330,6 +369,7 @@ void Simulation::check_breakage(const RunState& st) {
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;
     ev.time = time_;
+    ev.step = step_;
     ev.platen_stress = st.platen_stress;
     ev.parent = parent.id;
     ev.parent_volume = parent.shape->volume();
@@ -355,6 +395,7 @@ void Simulation::check_breakage(const RunState& st) {
       Grain c;
       c.id = next_id_++;
       c.parent = parent.id;
+      c.origin = parent.origin;
       c.generation = parent.generation + 1;
       c.shape = f.shape;
       c.material = parent.material;

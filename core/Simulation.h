@@ -10,6 +10,7 @@
 #include "core/BreakageModel.h"
 #include "core/Engine.h"
 #include "core/FragmentBuilder.h"
+#include "core/Guards.h"
 #include "core/Loading.h"
 #include "core/Observer.h"
 #include "core/Screening.h"
@@ -50,6 +51,7 @@ struct SimulationSettings {
   bool auto_reduce_dt = true;         // shrink dt (with a warning) below the engine's bound
   long stop_after_breakage_events = 0;  // 0 = never (single-grain crushing stops at 1)
   int threads = 1;
+  GuardSettings guards;               // physical invariants (core/Guards.h)
 };
 
 // Everything besides the grains that a run needs to continue from a checkpoint. The
@@ -66,6 +68,7 @@ struct SimulationState {
   double schedule_last_stress = 0;
   std::size_t grains_initial = 0;
   double mass_initial = 0, void_ratio_initial = 0, max_platen_stress = 0;
+  double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
 };
 
 class Simulation {
@@ -109,6 +112,14 @@ class Simulation {
   // Pull poses from the engine into grains() (observers that draw or measure call this).
   void sync_grains();
 
+  // Physical guards (core/Guards.h), for code that steps the engine outside run() (packing
+  // settlement): account the platen's work over one step, and check every invariant now.
+  // Throws PhysicsGuardError.
+  void account_platen_work(double force, double travel) { energy_in_ += std::abs(force * travel); }
+  void check_guards(const char* phase, double dt, bool full);
+  // Largest margins the guards have seen so far in this process.
+  const GuardReading& guard_margins() const { return guard_max_; }
+
  private:
   double area() const;
   double time_step(double stress) const;
@@ -140,6 +151,8 @@ class Simulation {
   double max_platen_stress_ = 0;
   std::size_t initial_grains_ = 0;
   double initial_mass_ = 0, initial_void_ratio_ = 0;
+  double energy_in_ = 0;
+  GuardReading guard_max_;
 };
 
 }  // namespace crumble

@@ -73,6 +73,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
                 {"dt_reductions", st.dt_reductions},
                 {"next_id", st.next_id},
                 {"schedule_last_stress", st.schedule_last_stress},
+                {"energy_in", st.energy_in},
                 {"grains_initial", st.grains_initial},
                 {"mass_initial", st.mass_initial},
                 {"void_ratio_initial", st.void_ratio_initial},
@@ -88,6 +89,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
     }
     grains.push_back({{"id", g.id},
                       {"parent", g.parent},
+                      {"origin", g.origin},
                       {"generation", g.generation},
                       {"shape", it->second},
                       {"material", g.material},
@@ -132,6 +134,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.dt_reductions = s.integer("dt_reductions", 0, 0);
   st.next_id = s.integer("next_id", 0, 0);
   st.schedule_last_stress = s.number("schedule_last_stress", 0);
+  st.energy_in = s.number("energy_in", 0, 0);
   st.grains_initial = static_cast<std::size_t>(s.integer("grains_initial", 0, 0));
   st.mass_initial = s.number("mass_initial", 0, 0);
   st.void_ratio_initial = s.number("void_ratio_initial", 0);
@@ -143,6 +146,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
     g.id = gc.integer("id", 0, 0);
     g.parent = gc.integer("parent", -1, -1);
     g.generation = static_cast<int>(gc.integer("generation", 0, 0));
+    g.origin = gc.integer("origin", g.generation == 0 ? g.id : g.parent, -1);
     const long si = gc.integer("shape", 0, 0, static_cast<long>(shapes.size()) - 1);
     g.shape = shapes[static_cast<std::size_t>(si)];
     g.material = static_cast<int>(gc.integer("material", 0, 0));

@@ -264,7 +264,7 @@ PackingSpec scene_from_config(const Config& sc, int dim) {
   return spec;
 }
 
-long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
+SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
   sim.set_container(spec.container);
   for (const auto& pg : spec.grains) {
     Grain g;
@@ -274,7 +274,8 @@ long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<b
     g.material = pg.material;
     sim.add_grain(std::move(g));
   }
-  if (!spec.settle) return 0;
+  SettleResult res;
+  if (!spec.settle) return res;
   // seeds/000 §5: push the cloud down with a plate under a small force until stable.
   Engine& e = sim.engine();
   const auto& ss = spec.settle_settings;
@@ -289,20 +290,32 @@ long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<b
   const long window = std::max(1L, std::lround(ss.window / dt));
   const long max_steps = std::max(window, std::lround(ss.max_time / dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
-  while (steps < max_steps && !(stop && stop->load())) {
+  const long guard_every = std::max(1L, sim.settings().sample_every);
+  res.converged = false;
+  while (steps < max_steps) {
+    if (stop && stop->load()) {
+      res.interrupted = true;
+      break;
+    }
+    const double z0 = e.platen_position();
     e.step(dt);
     ++steps;
+    sim.account_platen_work(e.platen_force(), e.platen_position() - z0);
+    sim.check_guards("settling", dt, steps % guard_every == 0);
     if (steps % window == 0) {
       const double z = e.platen_position();
-      if (!std::isfinite(z)) throw std::runtime_error("packing settlement became non-finite");
       const bool loaded = e.platen_force() > 0.5 * ss.stress * area;
-      if (loaded && std::abs(last - z) < ss.tolerance * dmean) break;
+      if (loaded && std::abs(last - z) < ss.tolerance * dmean) {
+        res.converged = true;
+        break;
+      }
       last = z;
     }
   }
+  res.steps = steps;
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
-  return steps;
+  return res;
 }
 
 Json packing_to_json(const Simulation& sim, const PackingSpec& spec) {

@@ -57,10 +57,16 @@ PackingSpec packing_from_config(const Config& packing, const Config& container, 
 //   (seeds/000 §4.2: a grain crushed between two plates).
 PackingSpec scene_from_config(const Config& scene, int dimension);
 
+struct SettleResult {
+  long steps = 0;
+  bool interrupted = false;  // `stop` was raised before the packing was stable
+  bool converged = true;     // false: settle.max_time ran out before the platen came to rest
+};
+
 // Adds the grains to the simulation and, for generated clouds, pushes the platen down until
-// the packing is stable (the initial state of the run). Returns the settling steps.
-// `stop` (a signal flag) ends the settling early.
-long build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop = nullptr);
+// the packing is stable (the initial state of the run). `stop` (a signal flag) ends the
+// settling early; the result says so, and such a packing is not a valid start of a run.
+SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop = nullptr);
 
 // packing.json of the current grains (shape specs, poses) for reuse by another scenario.
 nlohmann::json packing_to_json(const Simulation& sim, const PackingSpec& spec);

@@ -161,6 +161,14 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   ss.fines_diameter = simc.number("fines_diameter", 0.0, 0.0);
   ss.auto_reduce_dt = simc.boolean("auto_reduce_dt", true);
   ss.stop_after_breakage_events = simc.integer("stop_after_breakage_events", 0, 0);
+  {
+    Config gc = simc.child("guards");
+    GuardSettings& g = ss.guards;
+    g.enabled = gc.boolean("enabled", g.enabled);
+    g.max_overlap_fraction = gc.number("max_overlap_fraction", g.max_overlap_fraction, 0.0, 1.0);
+    g.energy_factor = gc.number("energy_factor", g.energy_factor, 0.0);
+    g.containment = gc.boolean("containment", g.containment);
+  }
   ss.threads = sc.threads;
 
   LoadingSettings ls;

@@ -117,7 +117,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   const bool resumed = sim.resumed();
   const SimulationState st = sim.saved_state();
   sim.add_observer(std::make_shared<SeriesWriter>(out, resumed ? st.step : -1));
-  sim.add_observer(std::make_shared<EventsWriter>(out, resumed ? st.time : -1.0));
+  sim.add_observer(std::make_shared<EventsWriter>(out, resumed ? st.step : -1L));
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));

@@ -45,27 +45,30 @@ std::vector<std::vector<std::string>> read_csv(const std::string& path) {
   return rows;
 }
 
-CsvStream::CsvStream(std::string path, const std::string& header, int keep_column, double keep_until)
-    : path_(std::move(path)) {
+CsvStream::CsvStream(std::string path, const std::string& header, long keep_until_step) : path_(std::move(path)) {
   std::string kept;
-  if (keep_column >= 0) {
+  if (keep_until_step >= 0) {
     // Carry over the rows of the interrupted (or finished) earlier run up to the resume point.
     const std::string from = fs::exists(path_ + ".part") ? path_ + ".part" : path_;
     std::ifstream in(from);
     std::string line;
+    int col = -1;
     bool first = true;
     while (std::getline(in, line)) {
-      if (first) {
-        first = false;
-        continue;
-      }
       std::stringstream ss(line);
       std::string cell;
-      for (int k = 0; k <= keep_column && std::getline(ss, cell, ','); ++k) {
+      if (first) {
+        first = false;
+        for (int k = 0; std::getline(ss, cell, ','); ++k)
+          if (cell == "step") col = k;
+        if (col < 0) throw std::runtime_error("cannot resume '" + from + "': it has no step column");
+        continue;
+      }
+      for (int k = 0; k <= col && std::getline(ss, cell, ','); ++k) {
       }
       char* end = nullptr;
-      const double v = std::strtod(cell.c_str(), &end);
-      if (end != cell.c_str() && v <= keep_until) kept += line + "\n";
+      const long v = std::strtol(cell.c_str(), &end, 10);
+      if (end != cell.c_str() && v <= keep_until_step) kept += line + "\n";
     }
   }
   out_.open(path_ + ".part", std::ios::trunc);
@@ -97,7 +100,7 @@ SeriesWriter::SeriesWriter(const std::string& dir, long resume_step)
     : csv_(dir + "/series.csv",
            "time_s,step,dt_s,platen_stress_Pa,target_stress_Pa,axial_strain,void_ratio,grains,breakage_events,"
            "analyses,platen_height_m,platen_force_N,floor_force_N",
-           resume_step >= 0 ? 1 : -1, static_cast<double>(resume_step)),
+           resume_step),
       last_step_(resume_step) {}
 
 void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
@@ -113,20 +116,26 @@ void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
 
 void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
 
-EventsWriter::EventsWriter(const std::string& dir, double resume_time)
+EventsWriter::EventsWriter(const std::string& dir, long resume_step)
     : dir_(dir),
       csv_(dir + "/events.csv",
            "time_s,platen_stress_Pa,grain,diameter_m,generation,points,bonds,steps,wall_ms,outcome,criterion,"
-           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method",
-           resume_time >= 0 ? 0 : -1, resume_time) {}
+           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method,step",
+           resume_step) {}
 
 void EventsWriter::flush_pending() {
   if (!has_pending_) return;
   const auto& r = pending_;
   csv_.row() << r.time << ',' << r.platen_stress << ',' << r.grain << ',' << r.diameter << ',' << r.generation << ','
              << r.analysis.points << ',' << r.analysis.bonds << ',' << r.analysis.steps << ',' << r.analysis.wall_ms
-             << ',' << r.analysis.outcome << ',' << r.analysis.criterion << ',' << r.analysis.load << ",0,,,0,\n";
+             << ',' << r.analysis.outcome << ',' << r.analysis.criterion << ',' << r.analysis.load << ",0,,,0,,"
+             << r.step << '\n';
   has_pending_ = false;
+}
+
+void EventsWriter::on_sample(const Simulation&, const RunState&) {
+  flush_pending();
+  csv_.row().flush();
 }
 
 void EventsWriter::on_analysis(const Simulation&, const AnalysisRecord& r) {
@@ -149,7 +158,7 @@ void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
              << ',' << e.analysis.points << ',' << e.analysis.bonds << ',' << e.analysis.steps << ','
              << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.criterion << ','
              << e.analysis.load << ',' << e.children.size() << ',' << vols.str() << ',' << diams.str() << ','
-             << e.removed_volume << ',' << e.fragment_method << '\n';
+             << e.removed_volume << ',' << e.fragment_method << ',' << e.step << '\n';
   csv_.row().flush();
 }
 
@@ -369,7 +378,8 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   if (s.interrupted) j["interrupted"] = true;
   j["time_breakdown_s"] = {{"engine", s.timings.engine},     {"contacts", s.timings.contacts},
                            {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
-                           {"fragments", s.timings.fragments}, {"output", s.timings.observers}};
+                           {"fragments", s.timings.fragments}, {"guards", s.timings.guards},
+                           {"output", s.timings.observers}};
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)

@@ -17,11 +17,12 @@ namespace crumble {
 void write_file_atomic(const std::string& path, const std::string& content);
 
 // An append-only CSV written to `<path>.part` and renamed to `path` when finished. When a
-// run resumes, the rows of the earlier file (finished or .part) whose column `keep_column`
-// is at most `keep_until` are carried over first.
+// run resumes (`keep_until_step` >= 0), the rows of the earlier file (finished or .part)
+// whose `step` column is at most `keep_until_step` are carried over first: matched by the
+// integer step, never by a printed time.
 class CsvStream {
  public:
-  CsvStream(std::string path, const std::string& header, int keep_column = -1, double keep_until = 0);
+  CsvStream(std::string path, const std::string& header, long keep_until_step = -1);
   ~CsvStream();
   std::ofstream& row() { return out_; }
   void finish();
@@ -49,9 +50,12 @@ class SeriesWriter : public Observer {
 // MPa of platen stress.
 class EventsWriter : public Observer {
  public:
-  explicit EventsWriter(const std::string& dir, double resume_time = -1);
+  // resume_step >= 0: continue the rows of a run resumed at that step.
+  explicit EventsWriter(const std::string& dir, long resume_step = -1);
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
+  // Every row of a step is on disk before the step's sample (and checkpoint) is written.
+  void on_sample(const Simulation&, const RunState&) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
  private:

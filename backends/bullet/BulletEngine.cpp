@@ -578,9 +578,10 @@ struct BulletEngine::Impl {
       const BodyTag* t1 = tag_of(m->getBody1());
       if (!t0 || !t1 || (t0->wall >= 0 && t1->wall >= 0)) continue;
       btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), mid_sum(0, 0, 0);
-      double jn = 0;
+      double jn = 0, depth = 0;
       for (int k = 0; k < np; ++k) {
         const btManifoldPoint& p = m->getContactPoint(k);
+        depth = std::max(depth, -static_cast<double>(p.getDistance()));
         const btVector3 mid = 0.5 * (p.getPositionWorldOnA() + p.getPositionWorldOnB());
         j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
              p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
@@ -613,6 +614,7 @@ struct BulletEngine::Impl {
       c.force = vec(j) * (sgn / (scale * last_dt));
       c.normal = vec(normal) * sgn;
       c.point = vec(point) / scale;
+      c.overlap = depth / scale;
       out.push_back(c);
     }
     return out;

@@ -55,6 +55,7 @@ struct LsdemEngine::Item {
   Vec3 fa, ta, tb;
   Vec3 point, normal;
   double fsum = 0;
+  double overlap = 0;  // deepest node penetration (m)
   bool contact = false;
   long queries = 0, pen = 0, tree_queries = 0;
 };
@@ -442,6 +443,7 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
     out.fsum += fl;
     out.normal += n.n * fn;
   }
+  out.overlap = delta;
   out.contact = true;
 }
 
@@ -729,6 +731,7 @@ void LsdemEngine::compute_forces(double dt) {
     c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
     c.normal = normalized(it.normal);
     c.force = it.fa;
+    c.overlap = it.overlap;
     if (it.shape_wall) {
       c.wall = kFirstShapeWall + it.b;
       shape_wall_force_[it.b] -= it.fa;

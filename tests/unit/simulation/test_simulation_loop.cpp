@@ -95,6 +95,7 @@ Outcome run_with(int threads, double fines) {
   ss.sample_every = 1;
   ss.threads = threads;
   ss.fines_diameter = fines;
+  ss.guards.containment = false;  // the fake engine has no walls
   LoadingSettings ls;
   ls.mode = "strain_rate";
   ls.strain_rate = 1.0;

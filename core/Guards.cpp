@@ -1,0 +1,134 @@
+#include "core/Guards.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <unordered_map>
+
+namespace crumble {
+
+namespace {
+
+std::string where(const GuardContext& at) {
+  std::ostringstream os;
+  os << "at step " << at.step << " (" << at.phase << ", t = " << at.time << " s, platen stress " << at.platen_stress
+     << " Pa, dt = " << at.dt << " s)";
+  return os.str();
+}
+
+// What a user can change, per engine: the engines keep grains apart by different means.
+std::string advice(const GuardContext& at) {
+  if (at.engine == "bullet" || at.engine == "ode")
+    return "Reduce the time step (time_step), raise engine.solver_iterations, or lower loading.max_stress.";
+  if (at.engine == "lsdem")
+    return "Raise the contact stiffness (engine.kn) so overlaps stay small at this stress, reduce the time step "
+           "(time_step), or lower loading.max_stress.";
+  return "Reduce the time step (time_step), stiffen the contacts, or lower loading.max_stress.";
+}
+
+[[noreturn]] void fail(const GuardContext& at, const std::string& what) {
+  throw PhysicsGuardError("physical guard failed " + where(at) + ": " + what + ". " + advice(at) +
+                          " (Guards: simulation.guards; see docs/scenarios.md.)");
+}
+
+}  // namespace
+
+void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, double platen_height, double void_ratio,
+                             double platen_force) {
+  if (!std::isfinite(platen_height) || !std::isfinite(platen_force) || !std::isfinite(void_ratio))
+    fail(at, "the engine state became non-finite (platen height " + std::to_string(platen_height) + " m, force " +
+                 std::to_string(platen_force) + " N)");
+  if (!s.enabled) return;
+  std::ostringstream os;
+  if (!(platen_height > 0)) {
+    os << "the platen is at " << platen_height << " m, at or below the floor";
+    fail(at, os.str());
+  }
+  if (!(void_ratio > 0)) {
+    os << "the void ratio is " << void_ratio << " (<= 0): the grains overlap more than their own volume";
+    fail(at, os.str());
+  }
+}
+
+double kinetic_energy(std::span<const Grain> grains, std::span<const Material> materials, int dimension) {
+  double ke = 0;
+  for (const auto& g : grains) {
+    const double rho = materials[static_cast<std::size_t>(g.material)].density;
+    const MassProperties& mp = g.shape->mass_properties();
+    ke += 0.5 * rho * mp.volume * dot(g.velocity, g.velocity);
+    const Vec3 wb = g.orientation.conjugate().rotate(g.angular_velocity);
+    if (dimension == 2) {
+      ke += 0.5 * rho * mp.inertia(2, 2) * wb.z * wb.z;
+    } else {
+      ke += 0.5 * rho * dot(wb, mp.inertia * wb);
+    }
+  }
+  return ke;
+}
+
+GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, const Container& box, int dimension,
+                              double platen_height, std::span<const Grain> grains,
+                              std::span<const Material> materials, std::span<const Contact> contacts) {
+  GuardReading r;
+  if (!s.enabled) return r;
+  std::unordered_map<GrainId, const Grain*> by_id;
+  by_id.reserve(grains.size());
+  for (const auto& g : grains) {
+    by_id[g.id] = &g;
+    if (!std::isfinite(g.position.x) || !std::isfinite(g.position.y) || !std::isfinite(g.position.z) ||
+        !std::isfinite(g.velocity.x) || !std::isfinite(g.velocity.y) || !std::isfinite(g.velocity.z))
+      fail(at, "grain " + std::to_string(g.id) + " has a non-finite position or velocity");
+    if (!s.containment) continue;
+    const double up = dimension == 2 ? g.position.y : g.position.z;
+    const bool out_x = g.position.x < 0 || g.position.x > box.lx;
+    const bool out_y = dimension == 3 && (g.position.y < 0 || g.position.y > box.ly);
+    if (out_x || out_y || up < 0 || up > platen_height) {
+      std::ostringstream os;
+      os << "grain " << g.id << " (d = " << g.shape->equivalent_diameter() << " m) has its centroid at (" << g.position.x
+         << ", " << g.position.y;
+      if (dimension == 3) os << ", " << g.position.z;
+      os << ") m, outside the container (lx " << box.lx;
+      if (dimension == 3) os << ", ly " << box.ly;
+      os << ", floor 0, platen " << platen_height << " m): it has passed through a wall";
+      fail(at, os.str());
+    }
+  }
+  if (s.max_overlap_fraction > 0) {
+    for (const auto& c : contacts) {
+      if (!(c.overlap > 0)) continue;
+      auto ia = by_id.find(c.a);
+      if (ia == by_id.end()) continue;
+      double d = ia->second->shape->equivalent_diameter();
+      if (!c.is_wall()) {
+        auto ib = by_id.find(c.b);
+        if (ib == by_id.end()) continue;
+        // Fragments of one grain are born overlapping where the fragment builder grew or
+        // hulled them (Zhu & Zhao 2019 §3.2): the engine separates them; not a failure.
+        if (ia->second->origin >= 0 && ia->second->origin == ib->second->origin) continue;
+        d = std::min(d, ib->second->shape->equivalent_diameter());
+      }
+      r.max_overlap_fraction = std::max(r.max_overlap_fraction, c.overlap / d);
+      if (c.overlap > s.max_overlap_fraction * d) {
+        std::ostringstream os;
+        os << "grain " << c.a << " overlaps " << (c.is_wall() ? "wall " + std::to_string(c.wall) : "grain " + std::to_string(c.b))
+           << " by " << c.overlap << " m, " << c.overlap / d << " of the smaller diameter (limit "
+           << s.max_overlap_fraction << ", simulation.guards.max_overlap_fraction)";
+        fail(at, os.str());
+      }
+    }
+  }
+  if (s.energy_factor > 0) {
+    const double ke = kinetic_energy(grains, materials, dimension);
+    r.energy_ratio = at.energy_budget > 0 ? ke / at.energy_budget : 0;
+    if (!std::isfinite(ke) || ke > s.energy_factor * at.energy_budget) {
+      std::ostringstream os;
+      os << "the grains' kinetic energy " << ke << " J exceeds " << s.energy_factor
+         << " times the energy that can have entered the system (" << at.energy_budget
+         << " J: initial kinetic energy, platen work, weight over the container height): the integration is unstable";
+      fail(at, os.str());
+    }
+  }
+  return r;
+}
+
+}  // namespace crumble

@@ -1,0 +1,69 @@
+// Physical invariants that every engine must keep (a run that breaks one stops with a
+// message instead of writing an impossible result): grains inside the container, the
+// platen above the floor, a positive void ratio, contact overlaps small against the grains,
+// and kinetic energy bounded by the energy put in. Checked by the Simulation cheaply at the
+// sampling interval (the O(1) ones every step) and while a packing settles.
+#pragma once
+#include <span>
+#include <stdexcept>
+#include <string>
+
+#include "core/Contact.h"
+#include "core/Engine.h"
+
+namespace crumble {
+
+struct GuardSettings {
+  bool enabled = true;
+  // Largest overlap per contact, as a fraction of the smaller grain's equivalent diameter
+  // (a wall contact: of the grain's). Rigid-grain DEM is meaningful only while overlaps
+  // stay small; rigid packings stay below 0.08, but a fragment replaced by its hull may be
+  // born overlapping a neighbour by ~0.3 of its own size, so the default is 0.5.
+  double max_overlap_fraction = 0.5;
+  // Kinetic energy may not exceed this multiple of the energy that can have entered the
+  // system (initial kinetic energy + platen work + the weight of every grain falling the
+  // container's height). A blow-up exceeds it by orders of magnitude.
+  double energy_factor = 10;
+  // Grain centroids must stay inside the container (walls, floor and platen); a centroid
+  // outside means a grain has passed more than half-way through a wall.
+  bool containment = true;
+};
+
+// A broken invariant: the run stops (exit 1) with this message.
+class PhysicsGuardError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What the guards need to know about the moment they check.
+struct GuardContext {
+  const char* phase = "loading";  // "settling" or "loading"
+  long step = 0;
+  double time = 0;
+  double platen_stress = 0;
+  double dt = 0;
+  std::string engine;         // name, for the advice
+  double energy_budget = 0;   // J (2D: J/m): energy that can have entered the system
+};
+
+// O(1) checks on the state the loop already has: finite values, platen above the floor,
+// void ratio > 0. Throws PhysicsGuardError.
+void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, double platen_height,
+                             double void_ratio, double platen_force);
+
+// The margins seen by a check (reported in summary.json so a user sees how close a run came).
+struct GuardReading {
+  double max_overlap_fraction = 0;  // largest overlap / smaller diameter
+  double energy_ratio = 0;          // kinetic energy / energy budget
+};
+
+// O(grains + contacts) checks: every centroid inside the container, overlaps, kinetic
+// energy. `grains` must hold current poses and velocities.
+GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, const Container& box, int dimension,
+                      double platen_height, std::span<const Grain> grains, std::span<const Material> materials,
+                      std::span<const Contact> contacts);
+
+// Kinetic energy (translational + rotational) of the grains at their physical masses.
+double kinetic_energy(std::span<const Grain> grains, std::span<const Material> materials, int dimension);
+
+}  // namespace crumble

@@ -1,0 +1,131 @@
+// The physical guards (core/Guards.h) on hand-made states: each invariant fails on a state
+// that breaks it, with a message that names it, and passes on a sane state.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/Guards.h"
+
+using namespace crumble;
+
+namespace {
+
+Grain sphere_at(GrainId id, Vec3 p, double r = 1e-3) {
+  Grain g;
+  g.id = id;
+  g.shape = Shape::sphere(r);
+  g.position = p;
+  return g;
+}
+
+GuardContext ctx(double budget = 1.0) {
+  GuardContext at;
+  at.step = 42;
+  at.engine = "bullet";
+  at.energy_budget = budget;
+  return at;
+}
+
+Container box() {
+  Container c;
+  c.lx = 0.01;
+  c.ly = 0.01;
+  c.height = 0.01;
+  return c;
+}
+
+template <class F>
+std::string failure_of(F&& f) {
+  try {
+    f();
+  } catch (const PhysicsGuardError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const std::vector<Material> kMat{Material{}};
+
+}  // namespace
+
+TEST(Guards, SaneStatePassesAndReportsItsMargins) {
+  std::vector<Grain> gs{sphere_at(0, {0.002, 0.002, 0.001}), sphere_at(1, {0.004, 0.002, 0.001})};
+  gs[0].velocity = {0.1, 0, 0};  // ½ m v² = ½ · 2650 · 4.19e-9 · 0.01 = 5.55e-8 J
+  Contact c;
+  c.a = 0;
+  c.b = 1;
+  c.overlap = 1e-5;  // 0.5 % of 2 mm
+  const std::vector<Contact> cs{c};
+  const GuardReading r = check_invariants(GuardSettings{}, ctx(1e-6), box(), 3, 0.01, gs, kMat, cs);
+  EXPECT_NEAR(r.max_overlap_fraction, 0.005, 1e-12);
+  const double ke = 0.5 * 2650 * (4.0 / 3.0) * M_PI * 1e-9 * 0.01;
+  EXPECT_NEAR(r.energy_ratio, ke / 1e-6, 1e-9);
+  EXPECT_NEAR(kinetic_energy(gs, kMat, 3), ke, 1e-15);
+}
+
+TEST(Guards, GrainOutsideTheContainerFails) {
+  for (Vec3 p : {Vec3{-1e-4, 0.005, 0.002}, Vec3{0.0101, 0.005, 0.002}, Vec3{0.005, 0.011, 0.002},
+                 Vec3{0.005, 0.005, -1e-4}, Vec3{0.005, 0.005, 0.0081}}) {
+    std::vector<Grain> gs{sphere_at(7, p)};
+    const std::string msg = failure_of(
+        [&] { check_invariants(GuardSettings{}, ctx(), box(), 3, /*platen*/ 0.008, gs, kMat, {}); });
+    EXPECT_NE(msg.find("grain 7"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("outside the container"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("step 42"), std::string::npos) << msg;
+  }
+  // 2D: the vertical axis is y; z is not checked.
+  std::vector<Grain> gs{sphere_at(3, {0.005, 0.009, 5.0})};
+  EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 2, 0.008, gs, kMat, {}); }), "");
+  gs[0].position.y = 0.007;
+  EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 2, 0.008, gs, kMat, {}); }), "");
+}
+
+TEST(Guards, DeepOverlapFailsAndNamesTheLimit) {
+  std::vector<Grain> gs{sphere_at(0, {0.002, 0.002, 0.001}), sphere_at(1, {0.003, 0.002, 0.001}, 0.5e-3)};
+  Contact c;
+  c.a = 0;
+  c.b = 1;
+  c.overlap = 0.6e-3;  // 0.6 of the smaller (1 mm) diameter
+  const std::vector<Contact> cs{c};
+  const std::string msg = failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); });
+  EXPECT_NE(msg.find("overlaps grain 1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("max_overlap_fraction"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("solver_iterations"), std::string::npos) << msg;  // Bullet's advice
+  // Fragments of one grain (same origin) are born overlapping: not a failure.
+  gs[0].origin = gs[1].origin = 5;
+  EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");
+  gs[1].origin = 6;
+  EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");
+  GuardSettings loose;
+  loose.max_overlap_fraction = 0.65;
+  EXPECT_EQ(failure_of([&] { check_invariants(loose, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");
+}
+
+TEST(Guards, KineticEnergyAboveTheBudgetFails) {
+  std::vector<Grain> gs{sphere_at(0, {0.005, 0.005, 0.002})};
+  gs[0].angular_velocity = {0, 0, 1e4};  // ½ I ω², I = 0.4 m r²
+  const double m = 2650 * (4.0 / 3.0) * M_PI * 1e-9;
+  const double ke = 0.5 * 0.4 * m * 1e-6 * 1e8;
+  EXPECT_NEAR(kinetic_energy(gs, kMat, 3), ke, 1e-9 * ke);
+  const std::string msg =
+      failure_of([&] { check_invariants(GuardSettings{}, ctx(ke / 20), box(), 3, 0.01, gs, kMat, {}); });
+  EXPECT_NE(msg.find("kinetic energy"), std::string::npos) << msg;
+  EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(ke / 5), box(), 3, 0.01, gs, kMat, {}); }), "");
+}
+
+TEST(Guards, ScalarInvariants) {
+  const GuardSettings s;
+  EXPECT_NE(failure_of([&] { check_scalar_invariants(s, ctx(), -1e-4, 0.5, 10); }).find("below the floor"),
+            std::string::npos);
+  EXPECT_NE(failure_of([&] { check_scalar_invariants(s, ctx(), 0.01, -0.2, 10); }).find("void ratio"),
+            std::string::npos);
+  EXPECT_NE(failure_of([&] { check_scalar_invariants(s, ctx(), 0.01, 0.5, std::nan("")); }).find("non-finite"),
+            std::string::npos);
+  EXPECT_EQ(failure_of([&] { check_scalar_invariants(s, ctx(), 0.01, 0.5, 10); }), "");
+  // Switched off, only non-finite states still stop a run.
+  GuardSettings off;
+  off.enabled = false;
+  EXPECT_EQ(failure_of([&] { check_scalar_invariants(off, ctx(), -1, -1, 10); }), "");
+  EXPECT_NE(failure_of([&] { check_scalar_invariants(off, ctx(), std::nan(""), 1, 10); }), "");
+}
