@@ -423,6 +423,17 @@ void apply_override(Json& doc, const std::string& assignment) {
     throw ConfigError("--set " + assignment, json_path,
                       "number '" + value + "' is outside the range of a double; expected a finite number");
   }
+  if (v.is_structured()) {
+    // Valid JSON: check it as a file would be (duplicate keys), paths from the --set target.
+    try {
+      parse_json_text(value, "--set " + assignment);
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      const std::string prefix = "--set " + assignment + ": " + e.path() + ": ";
+      throw ConfigError("--set " + assignment, json_path + e.path(),
+                        what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+    }
+  }
   Json* node = &doc;
   std::string seen;
   std::size_t start = 0;

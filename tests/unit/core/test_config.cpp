@@ -267,6 +267,11 @@ TEST(Config, DuplicateKeysAreErrors) {
   EXPECT_TRUE(has(e.what(), "d.json")) << e.what();
   const ConfigError a = config_error_of([] { parse_json_text(R"({"g": [{"x": 1}, {"y": 1, "y": 2}]})", "d.json"); });
   EXPECT_EQ(a.path(), "/g/1/y");
+  // Through --set as well, with the path from the target.
+  Json d = {{"x", 1}};
+  const ConfigError s = config_error_of([&] { apply_override(d, R"(loading={"mode": "none", "mode": "x"})"); });
+  EXPECT_EQ(s.path(), "/loading/mode");
+  EXPECT_TRUE(has(s.what(), "duplicate key 'mode'")) << s.what();
   // The same key in different objects is fine.
   EXPECT_NO_THROW(parse_json_text(R"({"a": {"k": 1}, "b": {"k": 1}, "k": [ {"k": 2} ]})", "d.json"));
 }
