@@ -5,15 +5,18 @@
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
 //   crumble bench pd-kernel|lsdem ...
 //   crumble --plugin lib.so <subcommand> ...   (out-of-tree engines, models, builders)
-// Exit status: 0 success, 2 bad input (scenario, option, mesh), 1 failure while running.
+// Exit status: 0 success, 2 bad input (scenario, option, mesh, output folder), 1 failure while
+// running, 130 / 143 a run ended early by SIGINT / SIGTERM (every output written).
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 
 #include "crumble_config.h"
@@ -33,13 +36,167 @@ using Json = nlohmann::json;
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop.store(true); }
-// Exit status of a run ended early by SIGINT/SIGTERM before it had anything to resume.
-constexpr int kExitInterrupted = 130;
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int sig) {
+  g_signal.store(sig);
+  g_stop.store(true);
+}
+// An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
+int interrupted_status() { return g_signal.load() == SIGINT ? 130 : 143; }
 
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+const char* kExitStatus =
+    "Exit status: 0 success; 2 bad input (the message names the file, the JSON path and what was expected; "
+    "also an --out folder that holds another run); 1 a failure while running; 130 (SIGINT, Ctrl-C) or 143 "
+    "(SIGTERM): the run was interrupted, every output was written (\"interrupted\": true in summary.json).";
+
+// Files a run writes into --out (and their temporary names): the only files --force removes.
+bool is_run_output(const std::string& name) {
+  static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv",
+                                              "ncl.csv", "psd.csv", "grains.pvd", "effective_scenario.json",
+                                              "packing.json", "checkpoint.json"};
+  for (const char* suffix : {"", ".part", ".tmp", ".part.tmp"}) {
+    const std::string sfx = suffix;
+    if (name.size() > sfx.size() && name.compare(name.size() - sfx.size(), sfx.size(), sfx) == 0 &&
+        files.count(name.substr(0, name.size() - sfx.size())))
+      return true;
+  }
+  return false;
+}
+bool is_vtk_output(const std::string& name) {
+  // vtk/grains_NNNNNNNN.vtp (and its temporary name)
+  return name.rfind("grains_", 0) == 0 &&
+         (name.size() > 4 && (name.compare(name.size() - 4, 4, ".vtp") == 0 ||
+                              (name.size() > 8 && name.compare(name.size() - 8, 8, ".vtp.tmp") == 0)));
+}
+
+// Entries of DIR that crumble wrote (vtk/ counted as one when it holds only snapshots).
+std::vector<std::string> run_outputs(const fs::path& dir, std::vector<std::string>* others) {
+  std::vector<std::string> mine;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    bool ours = e.is_regular_file() && is_run_output(n);
+    if (e.is_directory() && n == "vtk") {
+      ours = true;
+      for (const auto& v : fs::directory_iterator(e.path()))
+        if (!(v.is_regular_file() && is_vtk_output(v.path().filename().string()))) ours = false;
+    }
+    (ours ? mine : *others).push_back(n);
+  }
+  std::sort(mine.begin(), mine.end());
+  std::sort(others->begin(), others->end());
+  return mine;
+}
+
+std::string list_names(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size() && i < 6; ++i) s += (i ? ", " : "") + v[i];
+  if (v.size() > 6) s += ", …";
+  return s;
+}
+
+// A fresh run never mixes its files with another run's: an --out folder that is not empty is
+// refused unless --force, which removes crumble's own files of the earlier run (never other
+// files) first.
+void prepare_fresh_out(const std::string& out, bool force) {
+  std::error_code ec;
+  if (!fs::exists(out, ec)) return;
+  if (!fs::is_directory(out, ec)) throw InputError("--out " + out + ": exists and is not a directory");
+  std::vector<std::string> others;
+  const auto mine = run_outputs(out, &others);
+  if (mine.empty() && others.empty()) return;
+  if (!force) {
+    const bool resumable = fs::exists(fs::path(out) / "checkpoint.json");
+    throw InputError("--out " + out + ": the folder is not empty (" + list_names(mine.empty() ? others : mine) +
+                     "); a new run would mix its files with " + (mine.empty() ? "these" : "an earlier run's") +
+                     ". Choose an empty folder, pass --force to remove the earlier run's files first" +
+                     (resumable ? ", or --resume to continue the run it holds" : "") + ".");
+  }
+  for (const auto& n : mine) {
+    const fs::path p = fs::path(out) / n;
+    if (n == "vtk") {
+      for (const auto& v : fs::directory_iterator(p)) fs::remove(v.path());
+      fs::remove(p);
+    } else {
+      fs::remove(p);
+    }
+  }
+}
+
+// The first JSON path where two documents differ ("" when equal), skipping `ignore`.
+std::string first_difference(const Json& a, const Json& b, const std::string& path,
+                             const std::set<std::string>& ignore) {
+  if (ignore.count(path)) return "";
+  if (a.is_object() && b.is_object()) {
+    std::set<std::string> keys;
+    for (auto it = a.begin(); it != a.end(); ++it) keys.insert(it.key());
+    for (auto it = b.begin(); it != b.end(); ++it) keys.insert(it.key());
+    for (const auto& k : keys) {
+      const std::string p = path + "/" + k;
+      if (ignore.count(p)) continue;
+      if (!a.contains(k) || !b.contains(k)) return p;
+      const std::string d = first_difference(a[k], b[k], p, ignore);
+      if (!d.empty()) return d;
+    }
+    return "";
+  }
+  if (a.is_array() && b.is_array()) {
+    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+      const std::string d = first_difference(a[i], b[i], path + "/" + std::to_string(i), ignore);
+      if (!d.empty()) return d;
+    }
+    return a.size() == b.size() ? "" : path + "/" + std::to_string(std::min(a.size(), b.size()));
+  }
+  return a == b ? "" : (path.empty() ? "/" : path);
+}
+
+// Keys that may differ between a run and its resumption: the thread count (results do not
+// depend on it) and simulation.max_steps (raising it is how a run stopped by it continues).
+const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps"};
+
+void check_resumable(const std::string& out, const Json& effective) {
+  const fs::path dir(out);
+  if (!fs::exists(dir / "checkpoint.json"))
+    throw InputError("--out " + out + " --resume: no checkpoint.json to resume from (a run writes one when "
+                     "output.checkpoint_every > 0)");
+  std::ifstream in(dir / "effective_scenario.json");
+  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
+  const std::string d = first_difference(before, effective, "", kResumeMayDiffer);
+  if (d.empty()) return;
+  auto show = [&](const Json& j) {
+    try {
+      const Json::json_pointer ptr(d == "/" ? "" : d);
+      return j.contains(ptr) ? j.at(ptr).dump() : std::string("(absent)");
+    } catch (const std::exception&) {
+      return std::string("?");
+    }
+  };
+  throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
+                   ", now " + show(effective) +
+                   "); a resumed run must use the same effective scenario (only /threads and "
+                   "/simulation/max_steps may change). Use the same file and --set options, or start a new run "
+                   "in another folder");
+}
+
+// packing_settle_steps of the run being resumed (its last summary.json), -1 when unknown.
+double previous_settle_steps(const std::string& out) {
+  std::ifstream in(fs::path(out) / "summary.json");
+  if (!in) return -1;
+  try {
+    const Json j = Json::parse(in);
+    if (j.contains("packing_settle_steps") && j["packing_settle_steps"].is_number())
+      return j["packing_settle_steps"].get<double>();
+  } catch (const std::exception&) {
+  }
+  return -1;
+}
+
 
 Scenario load(const std::string& file, const std::vector<std::string>& sets, std::optional<std::uint64_t> seed,
               std::optional<int> threads) {
@@ -55,8 +212,16 @@ Scenario load(const std::string& file, const std::vector<std::string>& sets, std
 }
 
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,
-            std::optional<std::uint64_t> seed, std::optional<int> threads, bool quiet, bool resume) {
+            std::optional<std::uint64_t> seed, std::optional<int> threads, bool quiet, bool resume, bool force) {
   Scenario sc = load(file, sets, seed, threads);
+  if (resume && force) throw InputError("--resume and --force exclude each other");
+  double settle_before = -1;
+  if (resume) {
+    check_resumable(out, sc.effective);
+    settle_before = previous_settle_steps(out);
+  } else {
+    prepare_fresh_out(out, force);
+  }
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
@@ -88,8 +253,8 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
       // An unsettled packing is not the start of this run: nothing is written that a
       // later --resume or another scenario could take for it.
       std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
-                << " steps); no packing.json or checkpoint was written: run the scenario again (without --resume)\n";
-      return kExitInterrupted;
+                << " steps); no packing.json or checkpoint was written: start the run again (with --force to reuse this folder)\n";
+      return interrupted_status();
     }
     if (!settled.converged)
       std::cerr << "crumble: warning: the packing did not come to rest within packing.settle.max_time ("
@@ -108,8 +273,13 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
     std::cerr << format_progress(s, f, el) << "\n";
   };
   RunSummary sum = sim.run(progress);
-  sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
-  if (!resume) sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
+  // A resumed run settled nothing: report the settling of the run it continues.
+  if (!resume) {
+    sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
+    sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
+  } else if (settle_before >= 0) {
+    sum.extra["packing_settle_steps"] = settle_before;
+  }
   if (resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
   sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
@@ -120,6 +290,8 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   if (!quiet)
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
               << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n";
+  // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
+  if (sum.interrupted) return interrupted_status();
   return 0;
 }
 
@@ -164,6 +336,7 @@ int cmd_list() {
 int main(int argc, char** argv) {
   CLI::App app{"crumble — particle breakage in granular materials (Zhu & Zhao 2019, Harmon et al. 2020)"};
   app.set_version_flag("--version", std::string("crumble ") + CRUMBLE_VERSION);
+  app.footer(kExitStatus);
   app.require_subcommand(1);
   std::vector<std::string> plugins;
   app.add_option("--plugin", plugins, "load a plugin shared library (repeatable; before the subcommand)");
@@ -172,7 +345,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sets;
   std::optional<std::uint64_t> seed;
   std::optional<int> threads;
-  bool quiet = false, print = false, resume = false;
+  bool quiet = false, print = false, resume = false, force = false;
   double spacing = 0;
   long nodes = 0, bench_steps = 1000;
   int bench_threads = 1;
@@ -184,7 +357,12 @@ int main(int argc, char** argv) {
   run->add_option("--seed", seed, "random seed (overrides the scenario's)");
   run->add_option("--threads", threads, "threads (overrides the scenario's)")->check(CLI::Range(1, 1024));
   run->add_flag("--quiet", quiet, "no progress on stderr");
-  run->add_flag("--resume", resume, "continue from DIR/checkpoint.json (written when output.checkpoint_every > 0)");
+  run->add_flag("--resume", resume,
+                "continue from DIR/checkpoint.json (written when output.checkpoint_every > 0); the effective scenario "
+                "must equal DIR/effective_scenario.json but for threads and simulation.max_steps");
+  run->add_flag("--force", force,
+                "use a non-empty --out folder: first remove the earlier run's files there (only crumble's own)");
+  run->footer(kExitStatus);
 
   auto* val = app.add_subcommand("validate", "check a scenario without running it");
   val->add_option("scenario", file, "scenario JSON file")->required();
@@ -217,7 +395,7 @@ int main(int argc, char** argv) {
 
   try {
     for (const auto& p : plugins) load_plugin(p);
-    if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume);
+    if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*val) return cmd_validate(file, sets, print);
     if (*lst) return cmd_list();
     if (*shp) {

@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "geometry/Format.h"
+
 namespace crumble {
 
 using Json = nlohmann::json;
@@ -33,16 +35,24 @@ std::string type_name(const Json& j) {
   }
 }
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
+std::string fmt(double v) { return fmt_num(v); }
+
+// A document built in code (or edited by --set) may hold inf or NaN, which JSON text cannot:
+// reject it wherever it is, with its path, before any component reads it.
+void check_finite_numbers(const Json& node, const std::string& path) {
+  if (node.is_number_float() && !std::isfinite(node.get<double>()))
+    throw ConfigError(path.empty() ? "/" : path, "expected a finite number, got " + fmt(node.get<double>()));
+  if (node.is_object())
+    for (auto& [k, v] : node.items()) check_finite_numbers(v, path + "/" + k);
+  else if (node.is_array())
+    for (std::size_t i = 0; i < node.size(); ++i) check_finite_numbers(node[i], path + "/" + std::to_string(i));
 }
 }  // namespace
 
 Config::Config(Json& root) : node_(&root), path_(""), st_(std::make_shared<State>()) {
   st_->root = &root;
   if (!root.is_object()) throw ConfigError("/", "the scenario must be a JSON object, got " + type_name(root));
+  check_finite_numbers(root, "");
 }
 Config::Config(std::shared_ptr<State> st, Json* node, std::string path)
     : node_(node), path_(std::move(path)), st_(std::move(st)) {}
@@ -118,8 +128,17 @@ long Config::integer(const std::string& key, long def, long min, long max) const
     if (j->is_number_float()) {
       const double d = j->get<double>();
       if (!std::isfinite(d) || std::floor(d) != d) fail(key, "expected an integer, got " + fmt(d));
+      if (d < static_cast<double>(min) || d > static_cast<double>(max))
+        fail(key, "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " + fmt(d));
       v = static_cast<long>(d);
-    } else if (j->is_number_integer() || j->is_number_unsigned()) {
+    } else if (j->is_number_unsigned()) {
+      // Above LONG_MAX get<long>() would wrap to a negative number.
+      const auto u = j->get<std::uint64_t>();
+      if (u > static_cast<std::uint64_t>(max))
+        fail(key, "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
+                      std::to_string(u));
+      v = static_cast<long>(u);
+    } else if (j->is_number_integer()) {
       v = j->get<long>();
     } else {
       fail(key, "expected an integer, got " + type_name(*j));
@@ -129,6 +148,25 @@ long Config::integer(const std::string& key, long def, long min, long max) const
     fail(key, "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
                   std::to_string(v));
   return v;
+}
+
+std::uint64_t Config::unsigned_integer(const std::string& key, std::uint64_t def) const {
+  Json* j = at(key);
+  if (!j) {
+    (*node_)[key] = def;
+    return def;
+  }
+  const std::string range = "expected an integer in [0, " + std::to_string(std::numeric_limits<std::uint64_t>::max()) + "]";
+  if (j->is_number_unsigned()) return j->get<std::uint64_t>();
+  if (j->is_number_integer()) fail(key, range + ", got " + std::to_string(j->get<long>()));
+  if (j->is_number_float()) {
+    // Doubles hold integers exactly only up to 2^53: larger ones were rounded already.
+    const double d = j->get<double>();
+    if (!std::isfinite(d) || std::floor(d) != d || d < 0 || d > 9007199254740992.0)
+      fail(key, range + " (written without exponent or fraction above 2^53), got " + fmt(d));
+    return static_cast<std::uint64_t>(d);
+  }
+  fail(key, range + ", got " + type_name(*j));
 }
 
 bool Config::boolean(const std::string& key, bool def) const {
@@ -258,12 +296,114 @@ void walk(const Json& node, const std::string& path, const std::map<std::string,
 
 void Config::check_unknown() const { walk(*node_, path_, st_->read, st_->whole); }
 
+namespace {
+
+// Line and column (1-based) of byte `pos` of `text`.
+std::string line_column(const std::string& text, std::size_t pos) {
+  std::size_t line = 1, col = 1;
+  for (std::size_t i = 0; i < pos && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(col);
+}
+
+// nlohmann's DOM builder with the JSON path of every value tracked, so that a duplicate key
+// or a number overflow can be reported where it is.
+class CheckingSax {
+ public:
+  CheckingSax(Json& result, const std::string& text, const std::string& source)
+      : dom_(result, true), text_(text), source_(source) {}
+
+  bool null() { return value(dom_.null()); }
+  bool boolean(bool v) { return value(dom_.boolean(v)); }
+  bool number_integer(Json::number_integer_t v) { return value(dom_.number_integer(v)); }
+  bool number_unsigned(Json::number_unsigned_t v) { return value(dom_.number_unsigned(v)); }
+  bool number_float(Json::number_float_t v, const std::string& s) { return value(dom_.number_float(v, s)); }
+  bool string(std::string& v) { return value(dom_.string(v)); }
+  bool binary(Json::binary_t& v) { return value(dom_.binary(v)); }
+  bool start_object(std::size_t n) {
+    frames_.push_back({true, {}, {}, 0});
+    return dom_.start_object(n);
+  }
+  bool key(std::string& k) {
+    Frame& f = frames_.back();
+    if (!f.keys.insert(k).second)
+      throw ConfigError(source_, path_with(k),
+                        "duplicate key '" + k + "' in one object (JSON keeps only one of the values); give it once");
+    f.key = k;
+    return dom_.key(k);
+  }
+  bool end_object() {
+    frames_.pop_back();
+    return value(dom_.end_object());
+  }
+  bool start_array(std::size_t n) {
+    frames_.push_back({false, {}, {}, 0});
+    return dom_.start_array(n);
+  }
+  bool end_array() {
+    frames_.pop_back();
+    return value(dom_.end_array());
+  }
+  bool parse_error(std::size_t pos, const std::string& token, const nlohmann::detail::exception& ex) {
+    const std::string where = source_ + " " + line_column(text_, pos);
+    if (ex.id == 406)  // out_of_range: number overflow (e.g. 1e999)
+      throw ConfigError(where, path_of_next(),
+                        "number '" + token + "' is outside the range of a double; expected a finite number");
+    throw ConfigError(source_, std::string("malformed JSON: ") + ex.what());
+  }
+
+ private:
+  struct Frame {
+    bool object;
+    std::set<std::string> keys;
+    std::string key;
+    std::size_t index;
+  };
+  bool value(bool ok) {
+    if (!frames_.empty() && !frames_.back().object) ++frames_.back().index;
+    return ok;
+  }
+  std::string path() const {
+    std::string p;
+    for (const auto& f : frames_) p += "/" + (f.object ? f.key : std::to_string(f.index));
+    return p;
+  }
+  std::string path_with(const std::string& k) const {
+    std::string p;
+    for (std::size_t i = 0; i + 1 < frames_.size(); ++i)
+      p += "/" + (frames_[i].object ? frames_[i].key : std::to_string(frames_[i].index));
+    return p + "/" + k;
+  }
+  std::string path_of_next() const {
+    const std::string p = path();
+    return p.empty() ? "/" : p;
+  }
+
+  nlohmann::detail::json_sax_dom_parser<Json> dom_;
+  const std::string& text_;
+  const std::string& source_;
+  std::vector<Frame> frames_;
+};
+
+}  // namespace
+
 Json parse_json_text(const std::string& text, const std::string& source_name) {
+  Json result;
+  CheckingSax sax(result, text, source_name);
   try {
-    return Json::parse(text);
+    Json::sax_parse(text, &sax);
   } catch (const Json::parse_error& e) {
     throw ConfigError(source_name, std::string("malformed JSON: ") + e.what());
+  } catch (const Json::exception& e) {
+    throw ConfigError(source_name, std::string("unreadable JSON: ") + e.what());
   }
+  return result;
 }
 
 void apply_override(Json& doc, const std::string& assignment) {
@@ -271,11 +411,28 @@ void apply_override(Json& doc, const std::string& assignment) {
   if (eq == std::string::npos || eq == 0)
     throw ConfigError("--set " + assignment, "expected path=value (e.g. engine.type=lsdem)");
   const std::string path = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  std::string json_path;
+  for (char ch : path) json_path += ch == '.' ? '/' : ch;
+  json_path = "/" + json_path;
   Json v;
   try {
     v = Json::parse(value);
   } catch (const Json::parse_error&) {
     v = value;
+  } catch (const Json::out_of_range&) {
+    throw ConfigError("--set " + assignment, json_path,
+                      "number '" + value + "' is outside the range of a double; expected a finite number");
+  }
+  if (v.is_structured()) {
+    // Valid JSON: check it as a file would be (duplicate keys), paths from the --set target.
+    try {
+      parse_json_text(value, "--set " + assignment);
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      const std::string prefix = "--set " + assignment + ": " + e.path() + ": ";
+      throw ConfigError("--set " + assignment, json_path + e.path(),
+                        what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+    }
   }
   Json* node = &doc;
   std::string seen;

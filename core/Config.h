@@ -4,6 +4,7 @@
 // component asked for into an error naming its JSON path — a misspelt key never falls
 // back silently to a default.
 #pragma once
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -22,6 +23,9 @@ class ConfigError : public std::runtime_error {
  public:
   ConfigError(const std::string& path, const std::string& msg)
       : std::runtime_error(path + ": " + msg), path_(path) {}
+  // `where` (a file and line) in front of the JSON path.
+  ConfigError(const std::string& where, const std::string& path, const std::string& msg)
+      : std::runtime_error(where + ": " + path + ": " + msg), path_(path) {}
   const std::string& path() const { return path_; }
 
  private:
@@ -48,6 +52,8 @@ class Config {
   double positive(const std::string& key) const;
   long integer(const std::string& key, long def, long min = std::numeric_limits<long>::min(),
                long max = std::numeric_limits<long>::max()) const;
+  // The full unsigned 64-bit range (seeds).
+  std::uint64_t unsigned_integer(const std::string& key, std::uint64_t def) const;
   bool boolean(const std::string& key, bool def) const;
   std::string string(const std::string& key, const std::string& def) const;
   std::string string(const std::string& key) const;
@@ -89,11 +95,15 @@ class Config {
   void mark(const std::string& key) const;
 };
 
-// Parse text as JSON with a message naming line/column on error (ConfigError at "").
+// Parse text as JSON. Every error is a ConfigError naming the source, line and column:
+// malformed JSON, a number outside the range of a double (1e999), and a key given twice in
+// one object (which JSON parsers otherwise resolve silently to the last value), the
+// latter two with the JSON path.
 nlohmann::json parse_json_text(const std::string& text, const std::string& source_name);
 
 // Apply `--set a.b.c=value`: value is parsed as JSON when it is valid JSON, otherwise
-// taken as a string. Intermediate objects are created; array indices are numbers.
+// taken as a string (a number outside the range of a double is an error). Intermediate
+// objects are created; array indices are numbers.
 void apply_override(nlohmann::json& doc, const std::string& assignment);
 
 }  // namespace crumble

@@ -2,6 +2,7 @@
 // hull used by the alpha-shape FragmentBuilder. The single translation unit holding
 // CGAL's Alpha_shape_3 (it compiles slowly).
 #include "geometry/AlphaShape.h"
+#include "geometry/Format.h"
 
 #include <CGAL/Alpha_shape_3.h>
 #include <CGAL/Alpha_shape_cell_base_3.h>
@@ -232,8 +233,8 @@ AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const A
   std::vector<char> outside(nc);
   std::vector<int> queue;
   double last = -1;
-  std::string why = "no alpha value in [" + std::to_string(opt.start_spacings) + ", " +
-                    std::to_string(opt.max_spacings) + "] spacings";
+  std::string why = "no alpha value in [" + fmt_num(opt.start_spacings) + ", " +
+                    fmt_num(opt.max_spacings) + "] spacings";
   for (const double alpha : candidates) {
     if (alpha > a_max) break;
     if (last > 0 && alpha < last * (1 + opt.min_growth)) continue;

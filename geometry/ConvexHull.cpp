@@ -4,6 +4,7 @@
 // hull vertices that are not extreme (a point in the middle of a face or an edge that was
 // picked before the corners around it) and rebuilds from the extreme points only.
 #include "geometry/ConvexHull.h"
+#include "geometry/Format.h"
 
 #include <algorithm>
 #include <cmath>
@@ -388,9 +389,9 @@ std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) 
     throw std::invalid_argument("inset_convex_vertices: distance must be finite and >= 0");
   const double inradius = convex_inradius_about_centroid(convex);
   if (!(distance < inradius))
-    throw std::invalid_argument("inset_convex_vertices: inset distance " + std::to_string(distance) +
+    throw std::invalid_argument("inset_convex_vertices: inset distance " + fmt_num(distance) +
                                 " is not smaller than the distance from the centroid to the nearest face (" +
-                                std::to_string(inradius) + ")");
+                                fmt_num(inradius) + ")");
   // Per vertex, the displacement d minimising Σ_j (n_j·d + distance)² over its incident
   // triangles j (normal equations, lightly regularised so that a vertex whose faces are
   // nearly coplanar moves along their common normal and not sideways).

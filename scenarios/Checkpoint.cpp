@@ -108,7 +108,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
 
 Checkpoint read_checkpoint(const std::string& path, const std::string& scenario, int dim) {
   std::ifstream in(path);
-  if (!in) throw ConfigError(path, "cannot open checkpoint (was the run started with simulation.checkpoint_every?)");
+  if (!in) throw ConfigError(path, "cannot open checkpoint (a run writes one when output.checkpoint_every > 0)");
   std::stringstream ss;
   ss << in.rdbuf();
   Json doc = parse_json_text(ss.str(), path);

@@ -8,6 +8,7 @@
 #include <map>
 #include <unordered_map>
 
+#include "geometry/Format.h"
 #include "scenarios/ShapeSpec.h"
 
 namespace crumble {
@@ -140,7 +141,11 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
       vs += sh->volume();
     }
     const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
-    const double cloud_h = vs / (fill * area);
+    double rmax = 0;
+    for (const auto& sh : shapes) rmax = std::max(rmax, sh->bounding_radius() * 1.01);
+    // A cloud at fill_fraction; never lower than the largest grain (a few grains in a wide
+    // box would otherwise get a cloud thinner than one of them).
+    const double cloud_h = std::max(vs / (fill * area), 2 * rmax * 1.001);
     if (!height_given) spec.container.height = cloud_h;
     // Random sequential addition without overlap of bounding spheres, largest first.
     std::vector<std::size_t> order(shapes.size());
@@ -154,8 +159,15 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     for (std::size_t k : order) {
       const double r = shapes[k]->bounding_radius() * 1.01;
       rad[k] = r;
-      if (2 * r > spec.container.lx || (dim == 3 && 2 * r > spec.container.ly) || 2 * r > top)
-        pc.fail("count", "a grain of diameter " + std::to_string(diam[k]) + " m does not fit in the container");
+      if (2 * r > spec.container.lx || (dim == 3 && 2 * r > spec.container.ly) || 2 * r > top) {
+        const std::string which = 2 * r > spec.container.lx                ? "container.lx = " + fmt_num(spec.container.lx)
+                                  : dim == 3 && 2 * r > spec.container.ly ? "container.ly = " + fmt_num(spec.container.ly)
+                                                                          : "container.height = " + fmt_num(top);
+        pc.fail(keep_size ? "shape" : (mono > 0 ? "diameter" : "psd"),
+                "a grain of equivalent diameter " + fmt_num(diam[k]) + " m needs a space " + fmt_num(2 * r) +
+                    " m wide (its bounding sphere + 1 %), more than " + which +
+                    " m; give a larger container or smaller grains");
+      }
       bool ok = false;
       for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
         Vec3 p{rng.uniform(r, spec.container.lx - r), 0, 0};
@@ -185,6 +197,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
       g.position = pos[i];
       g.orientation = random_orientation(rng, dim);
       g.material = material;
+      g.source = pc.path();
       spec.grains.push_back(std::move(g));
     }
     return spec;
@@ -233,6 +246,8 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
       if (!(n > 0)) e.fail("orientation", "quaternion must be non-zero");
       g.orientation = Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
       g.material = static_cast<int>(e.integer("material", 0, 0));
+      g.source = spec.type == "file" ? pc.path() + "/path (" + pc.doc()["path"].get<std::string>() + ": " + e.path() + ")"
+                                     : e.path();
       spec.grains.push_back(std::move(g));
     }
     if (spec.type == "file" && file_cfg) file_cfg->check_unknown();
@@ -251,6 +266,7 @@ PackingSpec scene_from_config(const Config& sc, int dim) {
   g.shape = tmpl->scaled(d / tmpl->equivalent_diameter());
   g.shape_spec = scaled_spec(shc.doc(), d / tmpl->equivalent_diameter());
   g.material = static_cast<int>(sc.integer("material", 0, 0));
+  g.source = sc.path();
   const Aabb b = g.shape->bounds();
   const double half_height = dim == 3 ? -b.lo.z : -b.lo.y;
   const double height = dim == 3 ? b.hi.z - b.lo.z : b.hi.y - b.lo.y;

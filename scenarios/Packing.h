@@ -28,6 +28,7 @@ struct PlacedGrain {
   Vec3 position;
   Quat orientation;
   int material = 0;
+  std::string source;  // JSON path of the entry it came from (errors: source + "/material")
 };
 
 // Settling is measured in simulated time so that engines with very different time steps

@@ -4,6 +4,8 @@
 #include <set>
 #include <sstream>
 
+#include "geometry/Format.h"
+#include "scenarios/InputChecks.h"
 #include "scenarios/Registry.h"
 
 namespace crumble {
@@ -23,6 +25,9 @@ namespace {
 std::vector<Material> materials_from(const Config& root) {
   std::vector<Material> out;
   auto list = root.children("materials");
+  if (list.empty() && root.has("materials"))
+    root.fail("materials", "expected at least one material (an empty array would leave every grain without one; "
+                           "leave 'materials' out for the default material of Zhu & Zhao 2019, Table 1)");
   if (list.empty()) {
     // No "materials": one default material (seeds/000 Table 1), recorded in the effective scenario.
     Json& doc = const_cast<Json&>(root.doc());
@@ -89,6 +94,26 @@ void accept_sibling_options(const Config& section, const T& table, const std::st
   }
 }
 
+// With simulation.auto_reduce_dt false a step above an explicit engine's stable step is an
+// error; the bound depends on the grains, so ask a probe engine given the packing's extreme
+// grains now instead of failing after settling.
+void check_time_step_bound(const Config& root, const Config& ec, const RegistryEntry<EngineFactory>& entry,
+                           const EngineContext& ctx, const PackingSpec& packing,
+                           const std::vector<TimeStepRule>& rules) {
+  nlohmann::json copy = ec.doc();
+  Config probe_cfg(copy);
+  const double bound = packing_stable_dt(*entry.make(probe_cfg, ctx), packing, ctx.materials);
+  if (!std::isfinite(bound)) return;
+  for (std::size_t i = 0; i < rules.size(); ++i) {
+    if (rules[i].dt <= bound) continue;
+    const std::string where = root.doc()["time_step"].is_array() ? "/time_step/" + std::to_string(i) + "/dt" : "/time_step";
+    throw ConfigError(where, "time step " + fmt_num(rules[i].dt) + " s exceeds the " + entry.name +
+                                 " engine's stable step " + fmt_num(bound) +
+                                 " s for this packing, and /simulation/auto_reduce_dt is false; give a time step <= " +
+                                 fmt_num(bound) + " s or set simulation.auto_reduce_dt to true");
+  }
+}
+
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
@@ -101,7 +126,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   const int dim = static_cast<int>(root.integer("dimension", 3, 2, 3));
   if (opt.seed) doc["seed"] = *opt.seed;
   if (opt.threads) doc["threads"] = *opt.threads;
-  sc.seed = static_cast<std::uint64_t>(root.integer("seed", 1, 0));
+  sc.seed = root.unsigned_integer("seed", 1);
   sc.threads = static_cast<int>(root.integer("threads", 1, 1, 1024));
 
   EngineContext ctx;
@@ -120,6 +145,8 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   } else {
     sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
   }
+  check_packing_materials(sc.packing, ctx.materials.size());
+  check_explicit_grains(sc.packing, dim);
 
   auto check_dim = [&](const auto& entry, const Config& c) {
     for (int d : entry.dimensions)
@@ -170,6 +197,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     g.containment = gc.boolean("containment", g.containment);
   }
   ss.threads = sc.threads;
+  if (!ss.auto_reduce_dt) check_time_step_bound(root, ec, eentry, ctx, sc.packing, ss.time_steps);
 
   LoadingSettings ls;
   Config lc = root.child("loading");

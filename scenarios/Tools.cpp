@@ -10,6 +10,7 @@
 #include "core/Analysis.h"
 #include "scenarios/Packing.h"
 #include "geometry/ConvexHull.h"
+#include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
 #include "scenarios/ShapeSpec.h"
@@ -138,7 +139,10 @@ Json shape_report(const std::string& spec, const std::string& repr, double spaci
   }
   Json doc = parse_json_text(text, "--json");
   if (!doc.is_object()) throw ConfigError("--json", "expected a shape object");
-  if (spacing < 0) throw ConfigError("--spacing", "must be > 0");
+  // NaN compares false with everything: without the isfinite test it fell through to the
+  // automatic spacing silently.
+  if (!std::isfinite(spacing) || spacing < 0)
+    throw ConfigError("--spacing", "expected a finite grid spacing > 0 (m), got " + fmt_num(spacing));
   if (nodes < 0) throw ConfigError("--nodes", "must be > 0");
   if (spacing > 0 || nodes > 0) {
     Json& r = doc["resolution"];

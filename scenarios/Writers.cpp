@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 
 namespace crumble {
@@ -168,8 +169,11 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   // From the finished events.csv, so a resumed run counts the events before the resume.
   std::map<long, long> per;
   const auto rows = read_csv(dir_ + "/events.csv");
+  // A breakage row has children or removed fines (every child can be a fine, leaving no
+  // child in the engine); an analysis that did not break the grain has neither. Counting
+  // children alone dropped those events, and the file disagreed with summary.json.
   for (std::size_t i = 1; i < rows.size(); ++i)
-    if (rows[i].size() > 12 && std::atol(rows[i][12].c_str()) > 0)
+    if (rows[i].size() > 15 && (std::atol(rows[i][12].c_str()) > 0 || std::atof(rows[i][15].c_str()) > 0))
       ++per[static_cast<long>(std::floor(std::atof(rows[i][1].c_str()) / 1e6))];
   std::ostringstream os;
   os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
@@ -188,7 +192,8 @@ PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double 
   resumed_ = true;
   const auto rows = read_csv(dir_ + "/psd.csv");
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    if (rows[i].size() < 4 || rows[i][0] == "final") continue;
+    // The end-of-run tables ("final" and levels not reached) belong to the earlier run's end.
+    if (rows[i].size() < 4 || rows[i][0] == "final" || rows[i][0].find("_not_reached") != std::string::npos) continue;
     rows_ += rows[i][0] + ',' + rows[i][1] + ',' + rows[i][2] + ',' + rows[i][3] + '\n';
     d_max_ = std::max(d_max_, std::atof(rows[i][2].c_str()));
   }
@@ -207,13 +212,17 @@ void PsdWriter::write() const {
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
   while (next_ < levels_.size() && s.platen_stress >= levels_[next_]) {
-    table(sim, s.platen_stress, "level");
+    table(sim, s.platen_stress, ("level_" + fmt_num(levels_[next_])).c_str());
     ++next_;
     write();  // each table on disk as soon as it exists
   }
 }
 
 void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
+  // A level the stress never reached (a ramp to loading.max_stress ends a hair below it, or
+  // the run stopped early) still gets its table, from the final state, and says so.
+  for (; next_ < levels_.size(); ++next_)
+    table(sim, s.platen_stress, ("level_" + fmt_num(levels_[next_]) + "_not_reached_final_state").c_str());
   table(sim, s.platen_stress, "final");
   write();
 }

@@ -4,6 +4,7 @@
 // scale·(SI), inertia = scale²·(SI); every value leaves through to_si()/from the same
 // factors. With the automatic scale a power of two, these conversions are exact.
 #include "backends/bullet/BulletEngine.h"
+#include "geometry/Format.h"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -665,7 +666,7 @@ BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
   o.exact_spheres = cfg.choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"}) == "sphere";
   o.length_scale = cfg.number("length_scale", 0, 0);
   o.margin_fraction = cfg.positive("margin_fraction", 0.01);
-  if (o.margin_fraction > 0.1) cfg.fail("margin_fraction", "expected a number in (0, 0.1], got " + std::to_string(o.margin_fraction));
+  if (o.margin_fraction > 0.1) cfg.fail("margin_fraction", "expected a number in (0, 0.1], got " + fmt_num(o.margin_fraction));
   o.solver_iterations = static_cast<int>(cfg.integer("solver_iterations", 100, 1, 1000000));
   o.solver_tolerance = cfg.number("solver_tolerance", 2e-4, 0, 1);
   o.solver_residual = cfg.number("solver_residual", 0, 0, 1);

@@ -1,4 +1,5 @@
 #include "breakage/peridynamics/PdLattice.h"
+#include "geometry/Format.h"
 
 #include <algorithm>
 #include <cmath>
@@ -63,7 +64,7 @@ std::vector<StencilEntry> make_stencil(double R, bool partial) {
 const std::vector<StencilEntry>& horizon_stencil(double horizon_factor, bool partial_volumes) {
   if (!(horizon_factor >= 1.0) || !(horizon_factor <= 8.0))
     throw std::invalid_argument("peridynamics: horizon_factor must lie in [1, 8] spacings, got " +
-                                std::to_string(horizon_factor));
+                                fmt_num(horizon_factor));
   static std::mutex mu;
   static std::map<std::pair<double, bool>, std::vector<StencilEntry>> cache;
   std::lock_guard<std::mutex> lock(mu);
@@ -100,7 +101,7 @@ Lattice build_lattice(const std::vector<Vec3>& pts, double spacing, double horiz
       const double q = pts[i][a] / spacing;
       const double r = std::round(q);
       if (!std::isfinite(q) || std::abs(q - r) > 1e-6 || std::abs(r) > 1e6)
-        throw std::invalid_argument("peridynamics: point off the lattice of spacing " + std::to_string(spacing));
+        throw std::invalid_argument("peridynamics: point off the lattice of spacing " + fmt_num(spacing));
       ijk[i][a] = static_cast<int>(r);
       lo[a] = std::min(lo[a], ijk[i][a]);
       hi[a] = std::max(hi[a], ijk[i][a]);

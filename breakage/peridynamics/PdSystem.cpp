@@ -1,4 +1,5 @@
 #include "breakage/peridynamics/PdSystem.h"
+#include "geometry/Format.h"
 
 #include "breakage/peridynamics/PdKernel.h"
 
@@ -12,11 +13,11 @@ namespace crumble::pd {
 
 LpsMaterial LpsMaterial::from_young(double young, double poisson, double density) {
   if (!(young > 0) || !std::isfinite(young))
-    throw std::invalid_argument("peridynamics: Young's modulus must be > 0, got " + std::to_string(young));
+    throw std::invalid_argument("peridynamics: Young's modulus must be > 0, got " + fmt_num(young));
   if (!(poisson > -1.0 && poisson < 0.5))
-    throw std::invalid_argument("peridynamics: Poisson's ratio must lie in (-1, 0.5), got " + std::to_string(poisson));
+    throw std::invalid_argument("peridynamics: Poisson's ratio must lie in (-1, 0.5), got " + fmt_num(poisson));
   if (!(density > 0) || !std::isfinite(density))
-    throw std::invalid_argument("peridynamics: density must be > 0, got " + std::to_string(density));
+    throw std::invalid_argument("peridynamics: density must be > 0, got " + fmt_num(density));
   return {young / (3.0 * (1.0 - 2.0 * poisson)), young / (2.0 * (1.0 + poisson)), density};
 }
 
@@ -25,7 +26,7 @@ double critical_stretch(double gc, double K, double mu, double horizon) {
   const double denom = (3.0 * mu + std::pow(0.75, 4) * (K - 5.0 * mu / 3.0)) * horizon;
   if (!(gc > 0) || !std::isfinite(gc))
     throw std::invalid_argument("peridynamics: critical energy release rate G_c must be > 0, got " +
-                                std::to_string(gc));
+                                fmt_num(gc));
   if (!(denom > 0)) throw std::invalid_argument("peridynamics: eq. 5 has no real critical stretch for this K, μ");
   return std::sqrt(gc / denom);
 }

@@ -1,4 +1,5 @@
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
+#include "geometry/Format.h"
 
 #include <algorithm>
 #include <chrono>
@@ -48,7 +49,7 @@ double diameter_of_volume(double v) { return std::cbrt(6.0 * v / kPi); }
 void validate(const PointClusters& pc) {
   const std::size_t n = pc.points.size();
   if (!(pc.spacing > 0) || !std::isfinite(pc.spacing))
-    throw std::invalid_argument("PointClusters: spacing must be > 0 (got " + std::to_string(pc.spacing) + ")");
+    throw std::invalid_argument("PointClusters: spacing must be > 0 (got " + fmt_num(pc.spacing) + ")");
   if (pc.clusters < 1) throw std::invalid_argument("PointClusters: clusters must be >= 1");
   const Quat& q = pc.frame;
   const double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
@@ -154,7 +155,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
     bool have = false;
     if (d_est < opt_.hull_diameter) {
       r.method = "convex_hull";
-      r.note = "d_e " + std::to_string(d_est) + " m < convex_hull_diameter";
+      r.note = "d_e " + fmt_num(d_est) + " m < convex_hull_diameter";
     } else if (boundary[c].size() >= 4) {
       std::vector<Vec3> input = boundary[c];
       if (!opt_.alpha_boundary_only) {
@@ -174,7 +175,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
         }
         if (r.convexity >= opt_.hull_convexity) {
           r.method = "convex_hull";
-          r.note = "convexity " + std::to_string(r.convexity) + " >= convex_hull_convexity";
+          r.note = "convexity " + fmt_num(r.convexity) + " >= convex_hull_convexity";
         } else {
           r.method = "alpha_shape";
           mesh = a.mesh;
@@ -304,7 +305,7 @@ std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, con
   o.alpha.start_spacings = cfg.number("alpha_start_spacings", 2.0, 0.5, 100.0);
   o.alpha.max_spacings = cfg.number("alpha_max_spacings", 20.0, 0.5, 1e6);
   if (o.alpha.max_spacings < o.alpha.start_spacings)
-    cfg.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + std::to_string(o.alpha.start_spacings) + ")");
+    cfg.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + fmt_num(o.alpha.start_spacings) + ")");
   o.alpha.max_steps = static_cast<int>(cfg.integer("max_alpha_steps", 400, 1, 1000000));
   o.alpha.min_growth = cfg.number("alpha_min_growth", 0.0, 0.0, 10.0);
   o.alpha_boundary_only =

@@ -230,11 +230,19 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
                 .status,
             0);
   ASSERT_TRUE(fs::exists(b / "checkpoint.json"));
+  // A resume with another effective scenario is refused, naming the first differing path,
+  // and leaves the folder as it was.
+  expect_input_error("run " + scen + " --out " + b.string() + sets +
+                         " --set output.checkpoint_every=50 --set packing.count=41 --resume",
+                     "at /packing/count (was 40, now 41)");
   const Result r = run("run " + scen + " --out " + b.string() + sets + " --set output.checkpoint_every=50 --resume");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto sa = nlohmann::json::parse(slurp(a / "summary.json"));
   const auto sb = nlohmann::json::parse(slurp(b / "summary.json"));
   EXPECT_EQ(sb["resumed_from_step"], 125);
+  // The resumed summary reports the settling of the run it continues, not 0.
+  EXPECT_GT(sa["packing_settle_steps"].get<double>(), 0);
+  EXPECT_EQ(sa["packing_settle_steps"], sb["packing_settle_steps"]);
   EXPECT_EQ(sa["steps"], sb["steps"]);
   EXPECT_EQ(sa["grains_initial"], sb["grains_initial"]);
   EXPECT_DOUBLE_EQ(sa["void_ratio_initial"].get<double>(), sb["void_ratio_initial"].get<double>());
@@ -247,18 +255,19 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   EXPECT_EQ(series.find(",100,", series.find(",100,") + 1), std::string::npos);
   // Resuming a scenario that never wrote a checkpoint is an input error.
   expect_input_error("run " + scen + " --out " + (base / "nothing_here").string() + sets + " --resume",
-                     "checkpoint");
+                     "output.checkpoint_every");
 }
 
 TEST(Cli, SignalStopsTheRunWithEveryOutput) {
-  // SIGTERM ends the loop after the current step: exit 0, all files, a checkpoint to resume.
+  // SIGTERM ends the loop after the current step: exit 143 (128 + SIGTERM), all files, a
+  // checkpoint to resume.
   const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "interrupted";
   fs::remove_all(out);
   const Result r = run("--version >/dev/null; timeout --preserve-status -s TERM 4 " + std::string(CRUMBLE_BINARY) +
                        " run " + CRUMBLE_SOURCE_DIR + "/scenarios/oedometer_rigid_quick.json --quiet --out " +
                        out.string() + " --set loading.ramp_time=100 --set output.checkpoint_every=20 --set packing.count=30" +
                        " --set container.lx=6e-3 --set container.ly=6e-3 --set engine.solver_iterations=200");
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.status, 143) << r.output;
   EXPECT_NE(r.output.find("interrupted at step"), std::string::npos) << r.output;
   const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
   EXPECT_EQ(s["interrupted"], true);
@@ -296,4 +305,81 @@ TEST(Cli, EveryShippedScenarioValidates) {
     ++n;
   }
   EXPECT_GE(n, 7);
+}
+
+// ---- "Never a wrong answer with exit 0" ----
+
+TEST(Cli, NumberOverflowIsAnInputError) {
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set time_step=1e999", "/time_step: number '1e999' is outside");
+  const std::string inf = scenario_file("inf.json", "{\"name\": \"x\",\n \"time_step\": 1e999}");
+  expect_input_error("validate " + inf, inf + " line 2, column 20: /time_step");
+}
+
+TEST(Cli, DuplicateKeyIsAnInputError) {
+  const std::string f = scenario_file("dup.json", R"({"name": "a", "seed": 1, "name": "b"})");
+  expect_input_error("validate " + f, "/name: duplicate key 'name'");
+}
+
+TEST(Cli, ValidateCatchesWhatRunRejects) {
+  const std::string q = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json";
+  expect_input_error("validate " + q + " --set packing.material=5", "/packing/material: material index 5");
+  const std::string f = scenario_file("good.json", kGood);
+  expect_input_error("validate " + f + " --set simulation.auto_reduce_dt=false", "/simulation/auto_reduce_dt");
+  expect_input_error("validate " + f + " --set packing.grains.0.position=[0.0095,0.005,0.0011]",
+                     "/packing/grains/0/position");
+  expect_input_error("validate " + f + " --set materials=[]", "/materials: expected at least one material");
+  // One grain that fits is a valid cloud.
+  const Result one = run("validate " + q + " --set packing.count=1");
+  EXPECT_EQ(one.status, 0) << one.output;
+}
+
+TEST(Cli, SeedTakesTheFullUnsignedRange) {
+  const std::string f = scenario_file("good.json", kGood);
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "seed_max";
+  fs::remove_all(out);
+  const Result r = run("run " + f + " --quiet --out " + out.string() + " --seed 18446744073709551615");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(s["seed"].get<std::uint64_t>(), 18446744073709551615ull);
+}
+
+TEST(Cli, ShapeSpacingMustBeANumber) {
+  expect_input_error("shape --json '{\"type\":\"sphere\",\"radius\":1}' --spacing nan", "--spacing");
+  expect_input_error("shape --json '{\"type\":\"sphere\",\"radius\":1}' --spacing inf", "--spacing");
+}
+
+TEST(Cli, OutFolderNeverMixesTwoRuns) {
+  const std::string f = scenario_file("good.json", kGood);
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "reuse";
+  fs::remove_all(out);
+  ASSERT_EQ(run("run " + f + " --quiet --out " + out.string()).status, 0);
+  // Again into the same folder: refused, nothing touched.
+  const auto before = slurp(out / "summary.json");
+  expect_input_error("run " + f + " --quiet --out " + out.string(), "not empty");
+  EXPECT_EQ(slurp(out / "summary.json"), before);
+  // --force removes the earlier run's files (only crumble's) before running.
+  std::ofstream(out / "my_notes.txt") << "keep me";
+  fs::create_directories(out / "mine");
+  const Result r = run("run " + f + " --quiet --out " + out.string() + " --force --set simulation.max_steps=20");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(slurp(out / "my_notes.txt"), "keep me");
+  EXPECT_TRUE(fs::exists(out / "mine"));
+  EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["steps"], 20);
+  EXPECT_EQ(nlohmann::json::parse(slurp(out / "effective_scenario.json"))["simulation"]["max_steps"], 20);
+  // A folder holding only someone else's files is refused too.
+  const fs::path other = fs::temp_directory_path() / "crumble_cli_test" / "reuse_other";
+  fs::remove_all(other);
+  fs::create_directories(other);
+  std::ofstream(other / "data.txt") << "x";
+  expect_input_error("run " + f + " --quiet --out " + other.string(), "data.txt");
+  // --resume needs a checkpoint.
+  expect_input_error("run " + f + " --quiet --out " + out.string() + " --resume", "no checkpoint.json");
+}
+
+TEST(Cli, HelpDocumentsExitStatus) {
+  const Result h = run("run --help");
+  EXPECT_EQ(h.status, 0);
+  EXPECT_NE(h.output.find("143"), std::string::npos) << h.output;
+  EXPECT_NE(h.output.find("--force"), std::string::npos) << h.output;
 }

@@ -1,0 +1,96 @@
+// Output writers agree with each other and with summary.json.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "scenarios/ScenarioFactory.h"
+#include "scenarios/Writers.h"
+#include "tests/support/CliRunner.h"
+
+using namespace crumble;
+namespace fs = std::filesystem;
+
+namespace {
+const char* kTwoGrains = R"({"name": "w", "engine": {"type": "lsdem"},
+  "container": {"lx": 0.01, "ly": 0.01, "height": 0.006},
+  "packing": {"type": "grains", "grains": [
+    {"shape": {"type": "sphere", "radius": 0.001}, "position": [0.003, 0.005, 0.0011]},
+    {"shape": {"type": "sphere", "radius": 0.001}, "position": [0.007, 0.005, 0.0011]}]},
+  "loading": {"mode": "stress_ramp", "max_stress": 5e6}, "time_step": 1e-8})";
+
+struct Fixture {
+  Scenario sc;
+  fs::path dir;
+  explicit Fixture(const std::string& name) {
+    sc = build_scenario(parse_json_text(kTwoGrains, "w.json"), BuildOptions{});
+    build_packing(*sc.sim, sc.packing);
+    dir = fs::temp_directory_path() / "crumble_writer_test" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+};
+
+BreakageEvent event(double stress, std::size_t children, double removed) {
+  BreakageEvent e;
+  e.platen_stress = stress;
+  e.parent = 1;
+  e.parent_diameter = 2e-3;
+  e.parent_volume = 4.19e-9;
+  for (std::size_t i = 0; i < children; ++i) {
+    e.children.push_back(static_cast<GrainId>(10 + i));
+    e.child_volumes.push_back(1e-9);
+    e.child_diameters.push_back(1e-3);
+  }
+  e.removed_volume = removed;
+  e.analysis.outcome = "split";
+  return e;
+}
+}  // namespace
+
+TEST(EventsWriter, BreakagePerMpaCountsEventsWhoseChildrenAllBecameFines) {
+  Fixture f("per_mpa");
+  EventsWriter w(f.dir.string());
+  RunState s;
+  s.platen_stress = 2.5e6;
+  // Two splits with children, one whose pieces were all removed as fines, one analysis
+  // that did not break the grain: 3 events (what summary.json counts), in MPa bins 0, 1, 2.
+  w.on_breakage(*f.sc.sim, event(0.5e6, 2, 0));
+  w.on_breakage(*f.sc.sim, event(1.5e6, 0, 4.19e-9));
+  AnalysisRecord intact;
+  intact.platen_stress = 1.7e6;
+  intact.analysis.outcome = "intact";
+  w.on_analysis(*f.sc.sim, intact);
+  w.on_breakage(*f.sc.sim, event(2.2e6, 3, 1e-10));
+  RunSummary sum;
+  w.on_finish(*f.sc.sim, s, sum);
+  const auto rows = read_csv((f.dir / "breakage_per_mpa.csv").string());
+  ASSERT_EQ(rows.size(), 4u);  // header + 0–1, 1–2, 2–3 MPa
+  long total = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i][2], "1") << "bin " << rows[i][0];
+    total += std::stol(rows[i][2]);
+  }
+  EXPECT_EQ(total, 3);
+}
+
+TEST(PsdWriter, LevelNotReachedIsWrittenWithTheFinalState) {
+  Fixture f("psd");
+  PsdWriter w(f.dir.string(), {1e6, 5e6});
+  RunState s;
+  w.on_start(*f.sc.sim, s);
+  s.platen_stress = 1.2e6;
+  w.on_sample(*f.sc.sim, s);
+  // The ramp ends a hair below loading.max_stress.
+  s.platen_stress = 5e6 * (1 - 1e-9);
+  w.on_sample(*f.sc.sim, s);
+  RunSummary sum;
+  w.on_finish(*f.sc.sim, s, sum);
+  const std::string psd = crumble::testing_support::slurp(f.dir / "psd.csv");
+  EXPECT_NE(psd.find("\nlevel_1e+06,1200000,"), std::string::npos) << psd;
+  EXPECT_NE(psd.find("\nlevel_5e+06_not_reached_final_state,4999999.995,"), std::string::npos) << psd;
+  EXPECT_NE(psd.find("\nfinal,"), std::string::npos) << psd;
+  // Every table has the same 25 sieves: initial, two levels, final.
+  EXPECT_EQ(read_csv((f.dir / "psd.csv").string()).size(), 1u + 4 * 25);
+}
