@@ -1,6 +1,6 @@
 // The fragment-geometry seam: turn a Fracture into child shapes. Children are returned
-// in the parent's body frame (offset = child centroid); their volumes sum to the
-// parent's (the builder enforces it).
+// in the parent's body frame (offset = child centroid). Mass budget (the builder enforces
+// it, Simulation checks it to 1e-9): Σ child volumes + removed_volume = parent volume.
 #pragma once
 #include <string>
 #include <vector>
@@ -19,6 +19,9 @@ struct FragmentResult {
   std::vector<Fragment> children;
   std::string method;     // e.g. "alpha_shape", "convex_hull", "plane_cut"
   int fallbacks = 0;      // documented fallbacks taken (counted in summary.json)
+  // Volume of pieces the builder dropped (e.g. level-set pieces thinner than a grid cell):
+  // counted as removed mass (fines), never lost. 0 children and 0 removed = no split.
+  double removed_volume = 0;
 };
 
 class FragmentBuilder {

@@ -364,7 +364,8 @@ void Simulation::check_breakage(const RunState& st) {
                        results[k]};
     rec.analysis.fracture.reset();
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken || frags[k].children.size() < 2) continue;
+    // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
+    if (!results[k].broken || frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0) < 2) continue;
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;
@@ -378,12 +379,14 @@ void Simulation::check_breakage(const RunState& st) {
     ev.fragment_method = frags[k].method;
     ev.analysis = rec.analysis;
     fallbacks_ += frags[k].fallbacks;
-    double vsum = 0;
+    // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
+    double vsum = frags[k].removed_volume;
     for (const auto& f : frags[k].children) vsum += f.shape->volume();
-    if (std::abs(vsum - ev.parent_volume) > 1e-9 * ev.parent_volume)
+    if (!(frags[k].removed_volume >= 0) || !(std::abs(vsum - ev.parent_volume) <= 1e-9 * ev.parent_volume))
       throw std::runtime_error("fragment builder '" + builder_->name() + "' lost volume on grain " +
-                               std::to_string(parent.id) + ": children " + std::to_string(vsum) + " m³ vs parent " +
-                               std::to_string(ev.parent_volume) + " m³");
+                               std::to_string(parent.id) + ": children + removed " + std::to_string(vsum) +
+                               " m³ vs parent " + std::to_string(ev.parent_volume) + " m³");
+    ev.removed_volume = frags[k].removed_volume;
     std::vector<Grain> children;
     const Mat3 R = parent.orientation.matrix();
     for (const auto& f : frags[k].children) {

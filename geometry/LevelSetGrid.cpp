@@ -682,6 +682,93 @@ std::shared_ptr<const LevelSetGrid> LevelSetGrid::with_values(std::vector<double
   return g;
 }
 
+std::shared_ptr<const LevelSetGrid> LevelSetGrid::from_values(int dim, const Vec3& origin, double h,
+                                                              const std::array<int, 3>& counts,
+                                                              std::vector<double> values, double node_spacing,
+                                                              bool surface_nodes, const std::string& name) {
+  if (dim != 2 && dim != 3) throw std::invalid_argument(name + ": level-set dimension must be 2 or 3");
+  if (!(h > 0) || !std::isfinite(h))
+    throw std::invalid_argument(name + ": level-set spacing must be a finite number > 0 (got " + num(h) + ")");
+  if (!(node_spacing >= 0) || !std::isfinite(node_spacing))
+    throw std::invalid_argument(name + ": node spacing must be a finite number >= 0 (got " + num(node_spacing) + ")");
+  if (!is_finite(origin)) throw std::invalid_argument(name + ": level-set origin is not finite");
+  double total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const int need = (a == 2 && dim == 2) ? 1 : 2;
+    if (a == 2 && dim == 2 ? counts[a] != 1 : counts[a] < need)
+      throw std::invalid_argument(name + ": level-set node count along axis " + std::to_string(a) + " must be " +
+                                  (a == 2 && dim == 2 ? std::string("1 in 2D") : std::string(">= 2")) + " (got " +
+                                  std::to_string(counts[a]) + ")");
+    total *= counts[a];
+  }
+  if (total > 2e8) throw std::invalid_argument(name + ": level-set grid of " + num(total) + " nodes is too large");
+  if (static_cast<double>(values.size()) != total)
+    throw std::invalid_argument(name + ": " + std::to_string(values.size()) + " level-set values for " + num(total) +
+                                " grid nodes");
+  for (double v : values)
+    if (!std::isfinite(v)) throw std::invalid_argument(name + ": a level-set value is not finite");
+  auto g = LevelSetGridBuilder::make();
+  g->dim_ = dim;
+  g->h_ = h;
+  g->inv_h_ = 1.0 / h;
+  g->origin_ = origin;
+  if (dim == 2) g->origin_.z = 0;
+  g->n_ = counts;
+  g->name_ = name;
+  g->phi_ = std::move(values);
+  g->node_h_ = node_spacing > 0 ? node_spacing : h;
+  if (surface_nodes) {
+    LevelSetGridBuilder::build_nodes(*g, nullptr, 0, g->node_h_);
+    LevelSetGridBuilder::check_nodes(*g);
+  }
+  return g;
+}
+
+std::shared_ptr<const LevelSetGrid> LevelSetGrid::with_nodes(std::vector<Vec3> nodes,
+                                                             std::vector<double> weights) const {
+  if (nodes.size() != weights.size())
+    throw std::invalid_argument(name_ + ": " + std::to_string(nodes.size()) + " surface nodes but " +
+                                std::to_string(weights.size()) + " weights");
+  if (nodes.empty()) throw std::invalid_argument(name_ + ": no surface node");
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (!is_finite(nodes[i])) throw std::invalid_argument(name_ + ": surface node " + std::to_string(i) + " is not finite");
+    if (!(weights[i] > 0) || !std::isfinite(weights[i]))
+      throw std::invalid_argument(name_ + ": surface node weight " + std::to_string(i) + " must be a finite number > 0");
+    if (dim_ == 2) nodes[i].z = 0;
+  }
+  auto g = LevelSetGridBuilder::make();
+  *g = *this;
+  g->nodes_ = std::move(nodes);
+  g->node_w_ = std::move(weights);
+  return g;
+}
+
+std::shared_ptr<const LevelSetGrid> LevelSetGrid::translated(const Vec3& d) const {
+  if (!is_finite(d)) throw std::invalid_argument(name_ + ": non-finite translation");
+  auto g = LevelSetGridBuilder::make();
+  *g = *this;
+  Vec3 dd = d;
+  if (dim_ == 2) dd.z = 0;
+  g->origin_ += dd;
+  for (auto& x : g->nodes_) x += dd;
+  return g;
+}
+
+std::shared_ptr<const LevelSetGrid> LevelSetGrid::scaled(double f) const {
+  if (!(f > 0) || !std::isfinite(f)) throw std::invalid_argument(name_ + ": scale factor must be a finite number > 0");
+  auto g = LevelSetGridBuilder::make();
+  *g = *this;
+  g->h_ = h_ * f;
+  g->inv_h_ = 1.0 / g->h_;
+  g->origin_ = origin_ * f;
+  g->node_h_ = node_h_ * f;
+  for (auto& v : g->phi_) v *= f;
+  for (auto& x : g->nodes_) x *= f;
+  const double wf = dim_ == 3 ? f * f : f;  // node weights are areas (2D: lengths)
+  for (auto& w : g->node_w_) w *= wf;
+  return g;
+}
+
 std::shared_ptr<const LevelSetGrid> LevelSetGrid::reinitialised() const {
   auto g = LevelSetGridBuilder::make();
   *g = *this;

@@ -98,6 +98,25 @@ class LevelSetGrid {
   TriMesh to_mesh() const;
   std::vector<Vec3> outline() const;
 
+  // A grid from stored data (level-set splitting, checkpoints, saved grains): `values` in
+  // x-fastest order on `counts` nodes of spacing `h` from `origin` (2D: counts[2] == 1).
+  // Surface nodes are built from the zero level at `node_spacing` (0: h) unless
+  // `surface_nodes` is false (then the grid has none until with_nodes/with_values).
+  // Throws std::invalid_argument naming the defect on inconsistent or non-finite data.
+  static std::shared_ptr<const LevelSetGrid> from_values(int dimension, const Vec3& origin, double h,
+                                                         const std::array<int, 3>& counts,
+                                                         std::vector<double> values, double node_spacing = 0,
+                                                         bool surface_nodes = true,
+                                                         const std::string& name = "level set");
+  // The same grid with the given surface nodes and weights (checked: finite, weights > 0).
+  std::shared_ptr<const LevelSetGrid> with_nodes(std::vector<Vec3> nodes, std::vector<double> weights) const;
+  // Rigid translation by d (values unchanged, lattice and nodes moved).
+  std::shared_ptr<const LevelSetGrid> translated(const Vec3& d) const;
+  // Uniform scaling about the coordinate origin by f > 0: φ_f(x) = f·φ(x/f) on the lattice
+  // scaled by f. Volumes from mass_properties() scale by exactly f³ (2D: f²), because the
+  // smoothed Heaviside's width scales with the spacing.
+  std::shared_ptr<const LevelSetGrid> scaled(double f) const;
+
   // A new grid with values from `fn` on the same lattice (level-set CSG results).
   // Surface nodes are rebuilt from the new zero level at this grid's node spacing.
   // Throws std::invalid_argument on a size mismatch, non-finite values or no zero level.

@@ -261,8 +261,13 @@ Shape::Ptr Shape::from_level_set(std::shared_ptr<const LevelSetGrid> grid, Shape
   s->res_ = res;
   s->res_.level_set_spacing = grid->spacing();
   s->mass_ = grid->mass_properties();
-  if (norm(s->mass_.centroid) > 1e-9 * std::max(1e-300, norm(grid->bounds().size())))
-    throw std::invalid_argument("level-set shape grid must be centred on its centroid (shift the grid first)");
+  if (!(s->mass_.volume > 0)) throw std::invalid_argument("level-set shape has no inside (no negative value)");
+  // Invariant of Shape: centroid at the origin. A grid that is not centred is moved and
+  // the shift reported in recentring(), as the polyhedron factory does.
+  if (norm(s->mass_.centroid) > 1e-12 * std::max(1e-300, norm(grid->bounds().size()))) {
+    s->recentring_ = -s->mass_.centroid;
+    grid = grid->translated(-s->mass_.centroid);
+  }
   s->mass_.centroid = {};
   s->bounds_ = grid->bounds();
   s->source_grid_ = std::move(grid);
@@ -522,9 +527,9 @@ Shape::Ptr Shape::scaled(double f) const {
       return polygon(std::move(v), res);
     }
     case ShapeKind::LevelSet: {
-      // Scaling a signed-distance field: phi_f(x) = f * phi(x / f), sampled on a lattice
-      // scaled by f; the grid keeps its index layout.
-      throw std::logic_error("scaling a level-set shape is done by the level-set builder");
+      // Scaling a signed-distance field: phi_f(x) = f * phi(x / f) on the lattice scaled by
+      // f; the grid keeps its index layout (LevelSetGrid::scaled).
+      return from_level_set(source_grid_->scaled(f), res);
     }
   }
   return nullptr;

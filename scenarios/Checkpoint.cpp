@@ -43,8 +43,7 @@ Json shape_to_json(const Shape& s) {
       j = {{"type", "polygon"}, {"vertices", v}};
       break;
     }
-    case ShapeKind::LevelSet:
-      throw std::invalid_argument("a level-set shape cannot be written to a checkpoint");
+    case ShapeKind::LevelSet: j = level_set_to_json(s.level_set()); break;
   }
   const auto& r = s.resolution();
   j["resolution"] = {{"mesh_subdivisions", r.mesh_subdivisions},

@@ -12,8 +12,8 @@
 
 namespace crumble {
 
-// A shape as scenario JSON (analytic parameters or the closed mesh / polygon). Level-set
-// shapes cannot be written (std::invalid_argument).
+// A shape as scenario JSON (analytic parameters, the closed mesh / polygon, or the
+// level-set grid with its surface nodes).
 nlohmann::json shape_to_json(const Shape& s);
 
 nlohmann::json checkpoint_json(Simulation& sim, const std::string& scenario_name);

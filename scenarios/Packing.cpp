@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "geometry/Format.h"
+#include "scenarios/Checkpoint.h"
 #include "scenarios/ShapeSpec.h"
 
 namespace crumble {
@@ -346,8 +347,9 @@ Json packing_to_json(const Simulation& sim, const PackingSpec& spec) {
   for (const auto& pg : spec.grains) specs[pg.shape.get()] = &pg.shape_spec;
   for (const auto& g : sim.grains()) {
     auto it = specs.find(g.shape.get());
-    if (it == specs.end()) continue;  // fragments have no analytic spec
-    gs.push_back({{"shape", *it->second},
+    // Fragments have no spec of their own: their geometry (mesh or level-set grid) is written.
+    const Json shape = it != specs.end() ? *it->second : shape_to_json(*g.shape);
+    gs.push_back({{"shape", shape},
                   {"position", {g.position.x, g.position.y, g.position.z}},
                   {"orientation", {g.orientation.w, g.orientation.x, g.orientation.y, g.orientation.z}},
                   {"material", g.material}});

@@ -11,6 +11,7 @@
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
 #include "breakage/peridynamics/Peridynamics.h"
+#include "geometry/level_set/LevelSetBuilder.h"
 
 namespace crumble {
 
@@ -75,6 +76,10 @@ Table<BuilderFactory>& fragment_builders() {
     t.add({"alpha_shape", "alpha-shape polyhedra of point clusters (CGAL, seeds/000 §3.2); plane cuts of the parent mesh",
            [](const Config& c, const EngineContext& x) { return make_alpha_shape_builder(c, x); }, {}, {3}});
 #endif
+    t.add({"level_set",
+           "level-set children: plane cuts phi3 = max(phi1, -phi2), phi4 = max(phi1, phi2) (Harmon et al. 2020, "
+           "eqs. 14-15); point clusters by nearest cluster",
+           [](const Config& c, const EngineContext& x) { return make_level_set_builder(c, x); }, {}, {2, 3}});
     return t;
   }();
   return t;

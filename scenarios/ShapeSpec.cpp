@@ -91,9 +91,82 @@ TriMesh read_obj(const std::string& path) {
   return m;
 }
 
+nlohmann::json level_set_to_json(const LevelSetGrid& g) {
+  using Json = nlohmann::json;
+  const Vec3 o = g.origin();
+  const auto n = g.counts();
+  Json nodes = Json::array();
+  for (const auto& x : g.nodes()) nodes.push_back({x.x, x.y, x.z});
+  return Json{{"type", "level_set"},
+              {"dimension", g.dimension()},
+              {"origin", {o.x, o.y, o.z}},
+              {"spacing", g.spacing()},
+              {"counts", {n[0], n[1], n[2]}},
+              {"values", g.values()},
+              {"node_spacing", g.node_spacing()},
+              {"nodes", nodes},
+              {"node_weights", g.node_weights()}};
+}
+
+namespace {
+
+// {"type": "level_set", ...}: the grid as written by level_set_to_json.
+Shape::Ptr level_set_from_config(const Config& c, int dim, const ShapeResolution& res) {
+  c.integer("dimension", dim, dim, dim);
+  const auto o = c.numbers("origin");
+  if (o.size() != 3) c.fail("origin", "expected [x, y, z] (m)");
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!std::isfinite(o[i])) c.fail("origin/" + std::to_string(i), "expected a finite number");
+  const double h = c.positive("spacing");
+  const auto& nj = c.raw("counts");
+  if (!nj.is_array() || nj.size() != 3) c.fail("counts", "expected 3 integer node counts [nx, ny, nz]");
+  std::array<int, 3> n{};
+  double total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const int need = (a == 2 && dim == 2) ? 1 : 2;
+    if (!nj[a].is_number_integer() || nj[a].get<long>() < need || nj[a].get<long>() > 100000 ||
+        (a == 2 && dim == 2 && nj[a].get<long>() != 1))
+      c.fail("counts/" + std::to_string(a),
+             a == 2 && dim == 2 ? "expected 1 in 2D" : "expected an integer >= 2");
+    n[a] = nj[a].get<int>();
+    total *= n[a];
+  }
+  const auto& vj = c.raw("values");
+  if (!vj.is_array() || static_cast<double>(vj.size()) != total)
+    c.fail("values", "expected an array of " + std::to_string(static_cast<long>(total)) +
+                         " numbers (counts[0]·counts[1]·counts[2], x fastest)");
+  std::vector<double> v(vj.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!vj[i].is_number() || !std::isfinite(vj[i].get<double>()))
+      c.fail("values/" + std::to_string(i), "expected a finite number");
+    v[i] = vj[i].get<double>();
+  }
+  const double hs = c.number("node_spacing", 0.0, 0.0);
+  const bool given_nodes = c.has("nodes");
+  std::vector<Vec3> nodes;
+  std::vector<double> w;
+  if (given_nodes) {
+    nodes = point_list(c, "nodes", 3);
+    w = c.numbers("node_weights");
+    if (w.size() != nodes.size())
+      c.fail("node_weights", "expected one weight per node (" + std::to_string(nodes.size()) + ")");
+    for (std::size_t i = 0; i < w.size(); ++i)
+      if (!(w[i] > 0) || !std::isfinite(w[i])) c.fail("node_weights/" + std::to_string(i), "expected a number > 0");
+  } else if (c.has("node_weights")) {
+    c.fail("node_weights", "given without nodes");
+  }
+  return guarded(c, [&] {
+    auto g = LevelSetGrid::from_values(dim, {o[0], o[1], o[2]}, h, n, std::move(v), hs, !given_nodes, "level_set shape");
+    if (given_nodes) g = g->with_nodes(std::move(nodes), std::move(w));
+    return Shape::from_level_set(std::move(g), res);
+  });
+}
+
+}  // namespace
+
 Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
-  const std::vector<std::string> kinds3 = {"sphere", "ellipsoid", "superellipsoid", "box", "polyhedron"};
-  const std::vector<std::string> kinds2 = {"disk", "ellipse", "superellipse", "polygon"};
+  const std::vector<std::string> kinds3 = {"sphere", "ellipsoid", "superellipsoid", "box", "polyhedron", "level_set"};
+  const std::vector<std::string> kinds2 = {"disk", "ellipse", "superellipse", "polygon", "level_set"};
   const std::string type = c.choice("type", dim == 3 ? "sphere" : "disk", dim == 3 ? kinds3 : kinds2);
   const ShapeResolution res = resolution_from(c);
   // Unit templates: sizes default so that the equivalent diameter is about 1 m; the
@@ -108,6 +181,7 @@ Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
   };
   const double scale = c.positive("scale", 1.0);
   Shape::Ptr base = guarded(c, [&]() -> Shape::Ptr {
+    if (type == "level_set") return level_set_from_config(c, dim, res);
     if (type == "sphere") return Shape::sphere(length("radius", 0.5), res);
     if (type == "ellipsoid") {
       auto r = lengths("radii", {0.5, 0.5, 0.5}, 3);

@@ -69,8 +69,10 @@ class ThresholdModel : public BreakageModel {
 };
 
 // A sphere → one sphere of 7/8 of the volume at +x and one of 1/8 at −x (volume exact).
+// With `chip`, the 1/8 piece is dropped by the builder itself (FragmentResult::removed_volume).
 class EighthBuilder : public FragmentBuilder {
  public:
+  explicit EighthBuilder(bool chip = false) : chip_(chip) {}
   std::string name() const override { return "eighth"; }
   FragmentResult build(const Shape& parent, const Fracture&) const override {
     const double V = parent.volume();
@@ -78,8 +80,16 @@ class EighthBuilder : public FragmentBuilder {
     auto small = Shape::sphere(std::cbrt(0.125 * V * 3 / (4 * kPi)));
     // centroid preserved: 0.875 a = 0.125 b
     const double a = 1e-4, b = 0.875 * a / 0.125;
+    if (chip_) {
+      FragmentResult r{{{big, {a, 0, 0}}}, "chip", 0};
+      r.removed_volume = small->volume();
+      return r;
+    }
     return {{{big, {a, 0, 0}}, {small, {-b, 0, 0}}}, "eighth", 0};
   }
+
+ private:
+  bool chip_;
 };
 
 struct Outcome {
@@ -88,7 +98,7 @@ struct Outcome {
   std::size_t events = 0;
 };
 
-Outcome run_with(int threads, double fines) {
+Outcome run_with(int threads, double fines, bool chip = false) {
   EngineContext ctx;
   SimulationSettings ss;
   ss.time_steps = {{1e300, 1e-3}};
@@ -106,7 +116,7 @@ Outcome run_with(int threads, double fines) {
   scr.force_threshold = false;
   scr.min_diameter = 0;
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
-                 std::make_unique<EighthBuilder>(), ctx, ss, ls, sch, scr, 123);
+                 std::make_unique<EighthBuilder>(chip), ctx, ss, ls, sch, scr, 123);
   sim.set_container({0.01, 0.01, 0.01, 0});
   for (int i = 0; i < 8; ++i) {
     Grain g;
@@ -159,6 +169,17 @@ TEST(SimulationLoop, FinesLeaveTheEngineButStayInTheBudget) {
   EXPECT_GT(r.sum.mass_removed, 0);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
   for (const auto& g : r.grains) EXPECT_GE(g.shape->equivalent_diameter(), 1.05e-3);
+}
+
+// A builder's removed pieces (one child + removed volume, e.g. a level-set sliver thinner
+// than a cell) make a breakage whose removed mass enters the budget.
+TEST(SimulationLoop, BuilderRemovedVolumeCountsAsRemovedMass) {
+  const Outcome r = run_with(1, 0, /*chip=*/true);
+  EXPECT_EQ(r.sum.breakage_events, 8);
+  EXPECT_EQ(r.sum.grains_final, 8u);
+  const double rho = Material{}.density, V = 4.0 / 3 * kPi * 1e-9;
+  EXPECT_NEAR(r.sum.mass_removed, 8 * 0.125 * V * rho, 1e-9 * r.sum.mass_initial);
+  EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
 }
 
 TEST(SimulationLoop, ResultsDoNotDependOnThreads) {

@@ -1,0 +1,326 @@
+// Level-set splitting (Harmon et al. 2020 §3.2–3.3, eqs. 14–17) and the "level_set"
+// fragment builder: volumes against closed forms, piece counts, mass budget, nodes,
+// persistence of level-set grains, and an end-to-end run.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "geometry/LevelSetGrid.h"
+#include "geometry/LevelSetSplit.h"
+#include "geometry/level_set/LevelSetBuilder.h"
+#include "scenarios/Checkpoint.h"
+#include "scenarios/ShapeSpec.h"
+#include "tests/support/CliRunner.h"
+
+namespace crumble {
+namespace {
+
+constexpr double kR = 1e-3;   // 1 mm radius
+constexpr double kH = kR / 10;  // grid spacing: 20 cells across
+
+std::shared_ptr<const LevelSetGrid> disk_grid(double h = kH) {
+  return LevelSetGrid::sample(2, {{-kR, -kR, 0}, {kR, kR, 0}}, h,
+                              [](const Vec3& p) { return std::hypot(p.x, p.y) - kR; });
+}
+std::shared_ptr<const LevelSetGrid> sphere_grid(double h = kH) {
+  return LevelSetGrid::sample(3, {{-kR, -kR, -kR}, {kR, kR, kR}}, h, [](const Vec3& p) { return norm(p) - kR; });
+}
+
+// Relative error of the grid's own volume against the exact one: the yardstick for the
+// children (the smoothed Heaviside of eqs. 24–30 biases volumes by O((ε/R)²), ε = 1.5 h).
+double own_error(const LevelSetGrid& g, double exact) { return std::abs(g.mass_properties().volume - exact) / exact; }
+
+double cap_volume(double R, double c) {  // sphere part beyond the plane x = c (|c| < R)
+  const double t = R - c;
+  return kPi * t * t * (3 * R - t) / 3;
+}
+
+// Every edge of a closed, consistently oriented triangle mesh is used once in each direction.
+bool closed_mesh(const TriMesh& m) {
+  std::map<std::pair<int, int>, int> e;
+  for (const auto& t : m.triangles)
+    for (int a = 0; a < 3; ++a) ++e[{t[a], t[(a + 1) % 3]}];
+  for (const auto& [k, n] : e)
+    if (n != 1 || e.count({k.second, k.first}) == 0) return false;
+  return !m.triangles.empty();
+}
+
+double polygon_area(const std::vector<Vec3>& o) {
+  double a = 0;
+  for (std::size_t i = 0; i < o.size(); ++i) {
+    const Vec3 &p = o[i], &q = o[(i + 1) % o.size()];
+    a += p.x * q.y - q.x * p.y;
+  }
+  return 0.5 * a;
+}
+
+double budget_error(const FragmentResult& r, double parent_volume) {
+  double s = r.removed_volume;
+  for (const auto& c : r.children) s += c.shape->volume();
+  return std::abs(s - parent_volume) / parent_volume;
+}
+
+// Halves of a disk (2D) and a sphere (3D) cut through the centre.
+TEST(LevelSetSplit, DiskHalvesMatchExactAreaWithinGridError) {
+  const auto g = disk_grid();
+  const double A = kPi * kR * kR;
+  const SplitResult r = split_by_planes(*g, {{{1, 0, 0}, 0.0}});
+  ASSERT_FALSE(r.missed);
+  ASSERT_EQ(r.children.size(), 2u);
+  EXPECT_EQ(r.removed.size(), 0u);
+  // Tolerance: twice the parent grid's own relative area error (1.1e-3 here) plus 1e-3:
+  // the cut adds a straight edge with two corners whose smoothing is of the same order.
+  const double tol = 2 * own_error(*g, A) + 1e-3;
+  for (const auto& c : r.children) {
+    EXPECT_NEAR(c.volume / (A / 2), 1.0, tol);
+    const auto o = c.grid->outline();  // closed polygon (outline() follows the loop round)
+    ASSERT_GT(o.size(), 10u);
+    EXPECT_NEAR(polygon_area(o) / (A / 2), 1.0, 0.02);
+    for (std::size_t i = 0; i < o.size(); ++i) EXPECT_LT(norm(o[(i + 1) % o.size()] - o[i]), 1.5 * kH);
+    // New surface nodes on the cut, the parent's nodes kept on their side.
+    double cut_len = 0;
+    for (std::size_t i = 0; i < c.grid->nodes().size(); ++i) {
+      const Vec3& x = c.grid->nodes()[i];
+      EXPECT_GT(x.x * (c.centroid.x > 0 ? 1 : -1), -1e-12 * kR);  // right side
+      // (a parent node may sit on the rim of the cut: it belongs to the arc, not the cut)
+      if (std::abs(x.x) < 1e-3 * kH && norm(x) < kR - 0.1 * kH) cut_len += c.grid->node_weights()[i];
+    }
+    EXPECT_NEAR(cut_len / (2 * kR), 1.0, 0.03);  // the cut's length, carried by nodes on it
+  }
+  // Eq. 16 as a set identity: min(φ3, φ4) < 0 exactly where φ1 < 0 (away from the zero
+  // level by a cell), and equal to φ1 pointwise where the cut is farther than the surface.
+  for (double x = -1.3 * kR; x <= 1.3 * kR; x += 0.137 * kR)
+    for (double y = -1.3 * kR; y <= 1.3 * kR; y += 0.129 * kR) {
+      const Vec3 p{x, y, 0};
+      const double f1 = g->value(p);
+      const double m = std::min(r.children[0].grid->value(p), r.children[1].grid->value(p));
+      if (f1 < -kH) {
+        EXPECT_LT(m, 0) << x << " " << y;
+      }
+      if (f1 > kH) {
+        EXPECT_GT(m, 0) << x << " " << y;
+      }
+      if (f1 < 0 && std::abs(x) > -f1 + kH) {
+        EXPECT_NEAR(m, f1, 0.1 * kH) << x << " " << y;
+      }
+    }
+}
+
+TEST(LevelSetSplit, SphereHalvesMatchExactVolumeWithinGridError) {
+  const auto g = sphere_grid();
+  const double V = 4.0 / 3 * kPi * kR * kR * kR;
+  const SplitResult r = split_by_planes(*g, {{{0, 0, 1}, 0.0}});
+  ASSERT_EQ(r.children.size(), 2u);
+  const double tol = 2 * own_error(*g, V) + 1e-3;  // see the disk test
+  double cut_area = 0;
+  for (const auto& c : r.children) {
+    EXPECT_NEAR(c.volume / (V / 2), 1.0, tol);
+    EXPECT_TRUE(closed_mesh(c.grid->to_mesh()));
+    for (std::size_t i = 0; i < c.grid->nodes().size(); ++i)
+      if (std::abs(c.grid->nodes()[i].z) < 1e-3 * kH && norm(c.grid->nodes()[i]) < kR - 0.1 * kH)
+        cut_area += c.grid->node_weights()[i];
+  }
+  EXPECT_NEAR(cut_area / (2 * kPi * kR * kR), 1.0, 0.03);  // both faces of the cut
+}
+
+TEST(LevelSetSplit, OffCentreCutGivesTheCapVolume) {
+  const auto g = sphere_grid();
+  const double V = 4.0 / 3 * kPi * kR * kR * kR, c = 0.45 * kR;
+  const SplitResult r = split_by_planes(*g, {{normalized(Vec3{1, 1, 0}), c}});
+  ASSERT_EQ(r.children.size(), 2u);
+  const double cap = std::min(r.children[0].volume, r.children[1].volume);
+  // The cap is a sixth of the sphere: its edge and rim weigh more, hence the looser 1 %.
+  EXPECT_NEAR(cap / cap_volume(kR, c), 1.0, 2 * own_error(*g, V) + 1e-2);
+
+  LevelSetBuilder b;
+  const auto parent = Shape::sphere(kR, {1, kH, 0});
+  const FragmentResult fr = b.build(*parent, CuttingSurfaces{{{normalized(Vec3{1, 1, 0}), c}}});
+  ASSERT_EQ(fr.children.size(), 2u);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  for (const auto& ch : fr.children) EXPECT_EQ(ch.shape->kind(), ShapeKind::LevelSet);
+}
+
+TEST(LevelSetSplit, PlaneMissingTheGrainIsNoSplit) {
+  const auto g = sphere_grid();
+  const SplitResult r = split_by_planes(*g, {{{0, 1, 0}, 1.5 * kR}});
+  EXPECT_TRUE(r.missed);
+  EXPECT_TRUE(r.children.empty());
+  LevelSetBuilder b;
+  const auto parent = Shape::sphere(kR, {1, kH, 0});
+  const FragmentResult fr = b.build(*parent, CuttingSurfaces{{{{0, 1, 0}, 1.5 * kR}}});
+  EXPECT_TRUE(fr.children.empty());
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  EXPECT_EQ(fr.method, "no_split");
+}
+
+// A U (three boxes) cut across both arms: three pieces, one child each.
+TEST(LevelSetSplit, CutThroughUShapeGivesThreePieces) {
+  auto box = [](const Vec3& p, const Vec3& c, double hx, double hy) {
+    const double qx = std::abs(p.x - c.x) - hx, qy = std::abs(p.y - c.y) - hy;
+    return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0);
+  };
+  auto u = [&](const Vec3& p) {
+    return std::min({box(p, {0, -0.8e-3, 0}, 1e-3, 0.2e-3), box(p, {-0.8e-3, 0.2e-3, 0}, 0.2e-3, 1e-3),
+                     box(p, {0.8e-3, 0.2e-3, 0}, 0.2e-3, 1e-3)});
+  };
+  LevelSetOptions lo;
+  lo.exact_distance = false;  // min of box distances is not a distance inside
+  const auto g = LevelSetGrid::sample(2, {{-1e-3, -1e-3, 0}, {1e-3, 1.2e-3, 0}}, 0.05e-3, u, lo);
+  const auto parent = Shape::from_level_set(g);
+  LevelSetBuilder b;
+  // The parent frame is centred on the U's centroid: cut at world y = 0.4 mm.
+  const double y = 0.4e-3 + parent->recentring().y;
+  const FragmentResult fr = b.build(*parent, CuttingSurfaces{{{{0, 1, 0}, y}}});
+  EXPECT_EQ(fr.children.size(), 3u);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  // Two arm tips of 0.4 × 0.8 mm² each.
+  int tips = 0;
+  for (const auto& c : fr.children)
+    if (std::abs(c.shape->volume() / (0.4e-3 * 0.8e-3) - 1) < 0.03) ++tips;
+  EXPECT_EQ(tips, 2);
+}
+
+TEST(LevelSetSplit, SeveralPlanesGiveEveryArrangementCell) {
+  const auto parent = Shape::sphere(kR, {1, kH, 0});
+  LevelSetBuilder b;
+  const FragmentResult fr = b.build(*parent, CuttingSurfaces{{{{1, 0, 0}, 0.0}, {{0, 1, 0}, 0.0}}});
+  ASSERT_EQ(fr.children.size(), 4u);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  for (const auto& c : fr.children) EXPECT_NEAR(c.shape->volume() / (parent->volume() / 4), 1.0, 0.01);
+}
+
+TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
+  const auto parent = Shape::disk(kR, {1, kH, 0});
+  const LevelSetGrid& g = parent->level_set();
+  // The outermost grid node inside the disk along +x, and a line 0.2 h inside it: the cap
+  // holds that node but is thinner than a cell.
+  double xn = 0;
+  for (int i = 0; i < g.counts()[0]; ++i) {
+    const Vec3 p = g.origin() + Vec3{i * g.spacing(), 0, 0};
+    if (std::abs(p.y) < 1e-12 && g.value(p) < 0) xn = std::max(xn, p.x);
+  }
+  for (int j = 0; j < g.counts()[1]; ++j) {  // the lattice row through y = 0 (or nearest)
+    const double yy = g.origin().y + j * g.spacing();
+    if (std::abs(yy) < 0.5 * g.spacing())
+      for (int i = 0; i < g.counts()[0]; ++i) {
+        const Vec3 p = g.origin() + Vec3{i * g.spacing(), j * g.spacing(), 0};
+        if (g.value(p) < 0) xn = std::max(xn, p.x);
+      }
+  }
+  ASSERT_GT(xn, 0.5 * kR);
+  LevelSetBuilder b;
+  FragmentResult fr;
+  ASSERT_NO_THROW(fr = b.build(*parent, CuttingSurfaces{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}}));
+  EXPECT_EQ(fr.children.size(), 1u);
+  EXPECT_GT(fr.removed_volume, 0.0);
+  EXPECT_TRUE(std::isfinite(fr.removed_volume));
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+}
+
+// Peridynamics output: two clusters of a lattice in a rotated frame.
+TEST(LevelSetSplit, PointClustersPartitionASphere) {
+  const auto parent = Shape::sphere(kR, {1, kH, 0});
+  const Quat frame = Quat::from_axis_angle({0.3, -0.5, 0.8}, 0.7);
+  PointClusters pc;
+  pc.spacing = kR / 8;
+  pc.frame = frame;
+  pc.clusters = 2;
+  // Lattice x = i·a, cluster 1 beyond x = 0.3 R: the bisector lies at 0.3125 R.
+  for (int i = -8; i <= 8; ++i)
+    for (int j = -8; j <= 8; ++j)
+      for (int k = -8; k <= 8; ++k) {
+        const Vec3 body{i * pc.spacing, j * pc.spacing, k * pc.spacing};
+        if (norm(body) >= kR) continue;
+        pc.points.push_back(frame.conjugate().rotate(body));  // given in the lattice frame
+        pc.cluster.push_back(body.x > 0.3 * kR ? 1 : 0);
+        pc.on_surface.push_back(0);
+      }
+  LevelSetBuilder b;
+  const FragmentResult fr = b.build(*parent, pc);
+  ASSERT_EQ(fr.children.size(), 2u);
+  EXPECT_EQ(fr.method, "level_set_clusters");
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  const double cap = cap_volume(kR, 0.3125 * kR);
+  const Fragment& small = fr.children[0].shape->volume() < fr.children[1].shape->volume() ? fr.children[0]
+                                                                                           : fr.children[1];
+  EXPECT_NEAR(small.shape->volume() / cap, 1.0, 0.03);  // 3 %: grid error of a cap (see above) + rescale
+  EXPECT_GT(small.offset.x, 0.5 * kR);  // the cap lies beyond the cut, in the body frame
+}
+
+// Persistence: a level-set grain survives shape_to_json → shape_from_config exactly.
+TEST(LevelSetSplit, LevelSetShapeRoundTripsThroughJson) {
+  const auto parent = Shape::sphere(kR, {1, kH, 0});
+  const FragmentResult fr = LevelSetBuilder().build(*parent, CuttingSurfaces{{{{0, 0, 1}, 0.2 * kR}}});
+  ASSERT_EQ(fr.children.size(), 2u);
+  for (const auto& c : fr.children) {
+    nlohmann::json j = nlohmann::json::parse(shape_to_json(*c.shape).dump());
+    const auto back = shape_from_config(Config(j), 3);
+    ASSERT_EQ(back->kind(), ShapeKind::LevelSet);
+    EXPECT_DOUBLE_EQ(back->volume(), c.shape->volume());
+    EXPECT_EQ(back->level_set().nodes().size(), c.shape->level_set().nodes().size());
+    for (double t = -1.2; t <= 1.2; t += 0.11) {
+      const Vec3 p{t * kR, 0.37 * t * kR, -0.5 * t * kR};
+      EXPECT_DOUBLE_EQ(back->signed_distance(p), c.shape->signed_distance(p));
+    }
+  }
+  // 2D and a bad value: ConfigError naming the path.
+  const auto d = Shape::from_level_set(disk_grid());
+  nlohmann::json j2 = shape_to_json(*d);
+  EXPECT_DOUBLE_EQ(shape_from_config(Config(j2), 2)->volume(), d->volume());
+  j2["values"][3] = "x";
+  try {
+    shape_from_config(Config(j2), 2);
+    FAIL() << "accepted a non-number value";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("values/3"), std::string::npos) << e.what();
+  }
+  j2 = shape_to_json(*d);
+  j2["counts"][0] = 3;
+  EXPECT_THROW(shape_from_config(Config(j2), 2), ConfigError);
+  j2 = shape_to_json(*d);
+  EXPECT_THROW(shape_from_config(Config(j2), 3), ConfigError);  // dimension mismatch
+}
+
+TEST(LevelSetSplit, ScaledLevelSetShapeScalesVolumeExactly) {
+  const auto d = Shape::from_level_set(sphere_grid());
+  const auto s = d->scaled(1.1);
+  EXPECT_NEAR(s->volume() / d->volume(), 1.1 * 1.1 * 1.1, 1e-12);
+}
+
+// lsdem + peridynamics + level_set on the single-grain scene (breakage checked every 1 MPa
+// instead of 0.1 MPa so that the test runs in seconds: 173 N → 180 N crushing force).
+TEST(LevelSetSplit, EndToEndPeridynamicsOnLsdemBreaksIntoLevelSetChildren) {
+  namespace fs = std::filesystem;
+  const fs::path out = fs::temp_directory_path() / ("crumble_ls_e2e_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const auto r = testing_support::run_cli(
+      "run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/single_grain_pd.json --out " + out.string() +
+      " --quiet --set engine.type=lsdem --set engine.kn=5e6 --set fragments.type=level_set --set output.checkpoint_every=1000000 --set schedule.every_stress=1e6");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto s = nlohmann::json::parse(testing_support::slurp(out / "summary.json"));
+  EXPECT_GE(s["breakage_events"].get<int>(), 1) << s.dump(1);
+  const double m0 = s["mass_initial_kg"], m1 = s["mass_final_kg"], mr = s["mass_removed_kg"];
+  EXPECT_NEAR((m1 + mr) / m0, 1.0, 1e-9);
+  EXPECT_GE(s["grains_final"].get<int>(), 2) << s.dump(1);
+  // The children are saved as level sets in the final checkpoint and read back exactly
+  // (packing.json is written before loading, so it holds the unbroken grain).
+  const Checkpoint cp = read_checkpoint((out / "checkpoint.json").string(), "single_grain_pd", 3);
+  int ls = 0;
+  double v = 0;
+  for (const auto& g : cp.grains) {
+    ls += g.shape->kind() == ShapeKind::LevelSet;
+    v += g.shape->volume();
+  }
+  EXPECT_GE(ls, 2);
+  EXPECT_NEAR(v * 2650 / m1, 1.0, 1e-9);  // the grains' mass as summary.json reports it
+  bool vtp = false;
+  for (const auto& e : fs::directory_iterator(out / "vtk")) vtp |= fs::file_size(e.path()) > 1000;
+  EXPECT_TRUE(vtp);
+  fs::remove_all(out);
+}
+
+}  // namespace
+}  // namespace crumble
