@@ -45,18 +45,21 @@ class SeriesWriter : public Observer {
   long last_step_ = -1;
 };
 
-// events.csv: one row per breakage analysis; breakage_per_mpa.csv: crushing events per
-// MPa of platen stress.
+// events.csv: one row per breakage analysis, the common columns first, then one column per
+// figure the model declares (BreakageModel::figure_names, in that order);
+// breakage_per_mpa.csv: crushing events per MPa of platen stress.
 class EventsWriter : public Observer {
  public:
-  explicit EventsWriter(const std::string& dir, double resume_time = -1);
+  EventsWriter(const std::string& dir, std::vector<std::string> figure_names, double resume_time = -1);
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
  private:
   void flush_pending();
+  void write_figures(const BreakageAnalysis& a);
   std::string dir_;
+  std::vector<std::string> figures_;
   CsvStream csv_;
   bool has_pending_ = false;
   AnalysisRecord pending_;
