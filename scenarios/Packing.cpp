@@ -95,16 +95,24 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     // One template, or several drawn uniformly per grain; each scaled to the drawn size.
     std::vector<Shape::Ptr> tmpls;
     std::vector<Json> tmpl_json;
-    if (pc.doc().contains("shape") && pc.doc()["shape"].is_array()) {
-      for (auto& sc : pc.children("shape")) {
-        tmpls.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
-        tmpl_json.push_back(sc.doc());
+    // A template, or a pool of generated outlines ({"type": "pool"}: one template each).
+    auto add_template = [&](const Config& sc) {
+      if (dim == 2 && sc.doc().is_object() && sc.doc().value("type", "") == "pool") {
+        for (Json spec : shape_pool(sc)) {
+          Config one(spec);
+          tmpls.push_back(shape_from_config(one, dim, /*unit_size=*/true));
+          tmpl_json.push_back(spec);
+        }
+        return;
       }
-      if (tmpls.empty()) pc.fail("shape", "needs at least one shape template");
-    } else {
-      Config sc = pc.child("shape");
       tmpls.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
       tmpl_json.push_back(sc.doc());
+    };
+    if (pc.doc().contains("shape") && pc.doc()["shape"].is_array()) {
+      for (auto& sc : pc.children("shape")) add_template(sc);
+      if (tmpls.empty()) pc.fail("shape", "needs at least one shape template");
+    } else {
+      add_template(pc.child("shape"));
     }
     const double fill = pc.number("fill_fraction", dim == 3 ? 0.2 : 0.35, 0.01, 0.5);
     const int material = static_cast<int>(pc.integer("material", 0, 0));

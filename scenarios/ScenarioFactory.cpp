@@ -239,6 +239,11 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   Config oc = root.child("output");
   sc.output.series_every = oc.integer("series_every", 0, 0);
   sc.output.psd_at_stress = oc.numbers("psd_at_stress", {});
+  sc.output.psd_at_strain = oc.numbers("psd_at_strain", {});
+  for (std::size_t i = 0; i < sc.output.psd_at_strain.size(); ++i)
+    if (!(sc.output.psd_at_strain[i] > 0 && sc.output.psd_at_strain[i] < 1))
+      oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
+  sc.output.shape_metrics = oc.boolean("shape_metrics", true);
   sc.output.vtk_every = oc.integer("vtk_every", 0, 0);
   sc.output.vtk_final = oc.boolean("vtk_final", true);
   sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);

@@ -14,6 +14,8 @@ namespace crumble {
 struct OutputSettings {
   long series_every = 0;                 // steps between series rows (0 = simulation.sample_every)
   std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
+  std::vector<double> psd_at_strain;     // axial strains: PSD tables written when the strain first passes these
+  bool shape_metrics = true;             // shape.csv (means of the grains' shape descriptors per sample)
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -164,9 +165,72 @@ Shape::Ptr level_set_from_config(const Config& c, int dim, const ShapeResolution
 
 }  // namespace
 
+std::vector<Vec3> random_outline(const RandomOutlineSpec& spec) {
+  if (spec.vertices < 3) throw std::invalid_argument("random outline needs at least 3 vertices");
+  if (!(spec.irregularity >= 0 && spec.irregularity < 1)) throw std::invalid_argument("irregularity must be in [0, 1)");
+  if (spec.modes < 2) throw std::invalid_argument("random outline needs modes >= 2");
+  if (!(spec.radius > 0)) throw std::invalid_argument("random outline needs a radius > 0");
+  // Own generator (not core's Rng): the outline depends on this spec's seed only, and the
+  // doubles come from the raw 64-bit draws, identical on every standard library.
+  std::mt19937_64 gen(spec.seed);
+  auto uniform = [&gen] { return static_cast<double>(gen() >> 11) * 0x1.0p-53; };
+  // r(θ) = R (1 + Σ_{k=2..K} a_k cos(kθ + φ_k)): smooth random radii (mode 1 would only
+  // shift the centroid), a_k = irregularity · u_k k^-decay / Σ_j j^-decay with u_k uniform in
+  // [0, 1], so Σ a_k ≤ irregularity, r ≥ R (1 − irregularity) > 0 and the outline is
+  // star-shaped about the origin: a simple CCW polygon; outlines of one pool differ in how
+  // irregular they are, not only in their phases.
+  std::vector<double> amp, phase;
+  double wsum = 0;
+  for (int k = 2; k <= spec.modes; ++k) wsum += std::pow(static_cast<double>(k), -spec.decay);
+  for (int k = 2; k <= spec.modes; ++k) {
+    amp.push_back(spec.irregularity * uniform() * std::pow(static_cast<double>(k), -spec.decay) / wsum);
+    phase.push_back(2 * kPi * uniform());
+  }
+  std::vector<Vec3> v;
+  v.reserve(static_cast<std::size_t>(spec.vertices));
+  for (int i = 0; i < spec.vertices; ++i) {
+    const double t = 2 * kPi * i / spec.vertices;
+    double r = 1;
+    for (std::size_t m = 0; m < amp.size(); ++m) r += amp[m] * std::cos(static_cast<double>(m + 2) * t + phase[m]);
+    v.push_back({spec.radius * r * std::cos(t), spec.radius * r * std::sin(t), 0});
+  }
+  return v;
+}
+
+namespace {
+
+RandomOutlineSpec random_outline_spec(const Config& c, bool unit) {
+  RandomOutlineSpec s;
+  s.vertices = static_cast<int>(c.integer("vertices", s.vertices, 3, 100000));
+  s.irregularity = c.number("irregularity", s.irregularity, 0.0, 0.9);
+  s.modes = static_cast<int>(c.integer("modes", s.modes, 2, 1000));
+  s.decay = c.number("decay", s.decay, 0.0, 10.0);
+  s.seed = c.unsigned_integer("seed", s.seed);
+  s.radius = unit ? c.positive("radius", 0.5) : c.positive("radius");
+  return s;
+}
+
+}  // namespace
+
+std::vector<nlohmann::json> shape_pool(const Config& c) {
+  c.choice("type", "pool", {"pool"});
+  const long count = c.integer("count", 25, 1, 100000);
+  const RandomOutlineSpec s = random_outline_spec(c, /*unit=*/true);
+  std::vector<nlohmann::json> out;
+  for (long i = 0; i < count; ++i)
+    out.push_back({{"type", "random_polygon"},
+                   {"vertices", s.vertices},
+                   {"irregularity", s.irregularity},
+                   {"modes", s.modes},
+                   {"decay", s.decay},
+                   {"seed", s.seed + static_cast<std::uint64_t>(i)},
+                   {"radius", s.radius}});
+  return out;
+}
+
 Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
   const std::vector<std::string> kinds3 = {"sphere", "ellipsoid", "superellipsoid", "box", "polyhedron", "level_set"};
-  const std::vector<std::string> kinds2 = {"disk", "ellipse", "superellipse", "polygon", "level_set"};
+  const std::vector<std::string> kinds2 = {"disk", "ellipse", "superellipse", "polygon", "random_polygon", "level_set"};
   const std::string type = c.choice("type", dim == 3 ? "sphere" : "disk", dim == 3 ? kinds3 : kinds2);
   const ShapeResolution res = resolution_from(c);
   // Unit templates: sizes default so that the equivalent diameter is about 1 m; the
@@ -222,6 +286,7 @@ Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
       auto r = lengths("radii", {0.5, 0.5}, 2);
       return Shape::superellipse(r[0], r[1], c.number("eps", 1.0, 1e-3, 2.0), res);
     }
+    if (type == "random_polygon") return Shape::polygon(random_outline(random_outline_spec(c, unit)), res);
     return Shape::polygon(point_list(c, "vertices", 2), res);
   });
   return scale == 1.0 ? base : guarded(c, [&] { return base->scaled(scale); });

@@ -123,7 +123,13 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   const SimulationState st = sim.saved_state();
   sim.add_observer(std::make_shared<SeriesWriter>(out, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<EventsWriter>(out, sim.model().figure_names(), resumed ? st.step : -1L));
-  sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0));
+  // The strain at the checkpoint, as Simulation::state() computes it.
+  const double resume_strain =
+      resumed && st.initial_height > 0 ? (st.initial_height - st.platen_position) / st.initial_height : -1.0;
+  sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0,
+                                               sc.output.psd_at_strain, resume_strain));
+  if (sc.output.shape_metrics)
+    sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));
@@ -185,6 +191,12 @@ Json shape_report(const std::string& spec, const std::string& repr, double spaci
     j["nodes"] = m.vertices.size();
     j["triangles"] = m.triangles.size();
   }
+  // Shape descriptors of the outline (2D) or surface mesh (3D), as shape.csv reports them.
+  const GrainShapeMetrics gm = grain_shape_metrics(*s);
+  for (const auto& [k, v] : {std::pair<const char*, double>{"circularity", gm.circularity},
+                             {"aspect_ratio", gm.aspect_ratio}, {"sieve_size", gm.sieve_size},
+                             {"sphericity", gm.sphericity}, {"zingg_ei", gm.elongation}, {"zingg_fi", gm.flatness}})
+    if (std::isfinite(v)) j[k] = v;
   return j;
 }
 

@@ -11,6 +11,7 @@
 
 #include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
+#include "geometry/ShapeMetrics.h"
 
 namespace crumble {
 
@@ -214,9 +215,11 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   write_file_atomic(dir_ + "/breakage_per_mpa.csv", os.str());
 }
 
-PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress)
-    : dir_(dir), levels_(std::move(levels)) {
+PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress,
+                     std::vector<double> strain_levels, double resume_strain)
+    : dir_(dir), levels_(std::move(levels)), strains_(std::move(strain_levels)) {
   std::sort(levels_.begin(), levels_.end());
+  std::sort(strains_.begin(), strains_.end());
   if (resume_stress < 0) return;
   // Keep the earlier tables (but its final one) and the sieves they used.
   resumed_ = true;
@@ -224,40 +227,46 @@ PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double 
   for (std::size_t i = 1; i < rows.size(); ++i) {
     // The end-of-run tables ("final" and levels not reached) belong to the earlier run's end.
     if (rows[i].size() < 4 || rows[i][0] == "final" || rows[i][0].find("_not_reached") != std::string::npos) continue;
-    rows_ += rows[i][0] + ',' + rows[i][1] + ',' + rows[i][2] + ',' + rows[i][3] + '\n';
+    for (std::size_t k = 0; k < rows[i].size(); ++k) rows_ += (k ? "," : "") + rows[i][k];
+    rows_ += '\n';
     d_max_ = std::max(d_max_, std::atof(rows[i][2].c_str()));
   }
   while (next_ < levels_.size() && levels_[next_] <= resume_stress) ++next_;
+  while (next_strain_ < strains_.size() && strains_[next_strain_] <= resume_strain) ++next_strain_;
 }
 
 void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
   if (resumed_ && d_max_ > 0) return;
   for (const auto& g : sim.grains()) d_max_ = std::max(d_max_, g.shape->equivalent_diameter());
-  table(sim, s.platen_stress, "initial");
+  table(sim, s, "initial");
 }
 
 void PsdWriter::write() const {
-  write_file_atomic(dir_ + "/psd.csv", "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass\n" + rows_);
+  write_file_atomic(dir_ + "/psd.csv",
+                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain\n" + rows_);
 }
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
-  while (next_ < levels_.size() && s.platen_stress >= levels_[next_]) {
-    table(sim, s.platen_stress, ("level_" + fmt_num(levels_[next_])).c_str());
-    ++next_;
-    write();  // each table on disk as soon as it exists
-  }
+  bool wrote = false;
+  for (; next_ < levels_.size() && s.platen_stress >= levels_[next_]; ++next_, wrote = true)
+    table(sim, s, "level_" + fmt_num(levels_[next_]));
+  for (; next_strain_ < strains_.size() && s.axial_strain >= strains_[next_strain_]; ++next_strain_, wrote = true)
+    table(sim, s, "strain_" + fmt_num(strains_[next_strain_]));
+  if (wrote) write();  // each table on disk as soon as it exists
 }
 
 void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
   // A level the stress never reached (a ramp to loading.max_stress ends a hair below it, or
   // the run stopped early) still gets its table, from the final state, and says so.
   for (; next_ < levels_.size(); ++next_)
-    table(sim, s.platen_stress, ("level_" + fmt_num(levels_[next_]) + "_not_reached_final_state").c_str());
-  table(sim, s.platen_stress, "final");
+    table(sim, s, "level_" + fmt_num(levels_[next_]) + "_not_reached_final_state");
+  for (; next_strain_ < strains_.size(); ++next_strain_)
+    table(sim, s, "strain_" + fmt_num(strains_[next_strain_]) + "_not_reached_final_state");
+  table(sim, s, "final");
   write();
 }
 
-void PsdWriter::table(const Simulation& sim, double stress, const char* label) {
+void PsdWriter::table(const Simulation& sim, const RunState& s, const std::string& label) {
   // Sieves: geometric series from d_max down by factors of 2^(1/4), 24 sieves.
   std::vector<double> sieves;
   for (int k = 0; k <= 24; ++k) sieves.push_back(d_max_ * std::pow(2.0, -k / 4.0));
@@ -269,9 +278,86 @@ void PsdWriter::table(const Simulation& sim, double stress, const char* label) {
     double pass = sim.removed_volume();  // fines are smaller than every sieve listed here
     for (const auto& g : sim.grains())
       if (g.shape->equivalent_diameter() <= sv) pass += g.shape->volume();
-    os << label << ',' << stress << ',' << sv << ',' << (total > 0 ? 100.0 * pass / total : 0) << '\n';
+    os << label << ',' << s.platen_stress << ',' << sv << ',' << (total > 0 ? 100.0 * pass / total : 0) << ','
+       << s.axial_strain << '\n';
   }
   rows_ += os.str();
+}
+
+GrainShapeMetrics grain_shape_metrics(const Shape& shape) {
+  GrainShapeMetrics m;
+  try {
+    if (shape.dimension() == 2) {
+      const ShapeMetrics2D s = shape_metrics_2d(shape.outline());
+      m.circularity = s.circularity;
+      m.aspect_ratio = s.aspect_ratio;
+      m.sieve_size = s.sieve_size;
+    } else {
+      const TriMesh& mesh = shape.mesh();
+      const ShapeMetrics3D s = shape_metrics_3d(mesh, polyhedron_mass_properties(mesh));
+      m.sphericity = s.sphericity;
+      m.elongation = s.elongation;
+      m.flatness = s.flatness;
+    }
+  } catch (const std::invalid_argument&) {
+    // A degenerate outline or mesh (a sliver): no descriptor, left out of every mean.
+  }
+  return m;
+}
+
+ShapeWriter::ShapeWriter(const std::string& dir, int dimension, long resume_step)
+    : dim_(dimension),
+      csv_(dir + "/shape.csv",
+           dimension == 2 ? "time_s,step,axial_strain,platen_stress_Pa,grains,mean_circularity,mean_aspect_ratio,"
+                            "mean_sieve_size_m"
+                          : "time_s,step,axial_strain,platen_stress_Pa,grains,mean_sphericity,mean_EI,mean_FI",
+           resume_step),
+      last_step_(resume_step) {}
+
+void ShapeWriter::on_sample(const Simulation& sim, const RunState& s) {
+  if (s.step == last_step_) return;
+  last_step_ = s.step;
+  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> now;
+  double sum[3] = {0, 0, 0};
+  long n[3] = {0, 0, 0};
+  for (const auto& g : sim.grains()) {
+    auto it = now.find(g.shape.get());
+    if (it == now.end()) {
+      auto old = cache_.find(g.shape.get());
+      it = now.emplace(g.shape.get(), old != cache_.end() ? old->second
+                                                          : std::make_pair(g.shape, grain_shape_metrics(*g.shape)))
+               .first;
+    }
+    const GrainShapeMetrics& m = it->second.second;
+    const double v[3] = {dim_ == 2 ? m.circularity : m.sphericity, dim_ == 2 ? m.aspect_ratio : m.elongation,
+                         dim_ == 2 ? m.sieve_size : m.flatness};
+    for (int k = 0; k < 3; ++k)
+      if (std::isfinite(v[k])) {
+        sum[k] += v[k];
+        ++n[k];
+      }
+  }
+  cache_ = std::move(now);  // shapes no longer in use are released
+  // No grain with a descriptor (none left in the engine): the row is left out, never NaN.
+  if (n[0] == 0 || n[1] == 0 || n[2] == 0) return;
+  last_means_ = {sum[0] / n[0], sum[1] / n[1], sum[2] / n[2]};
+  for (double v : {s.time, s.axial_strain, s.platen_stress}) check_finite(v, "value in shape.csv");
+  csv_.row() << s.time << ',' << s.step << ',' << s.axial_strain << ',' << s.platen_stress << ',' << s.grains << ','
+             << last_means_[0] << ',' << last_means_[1] << ',' << last_means_[2] << '\n';
+  csv_.row().flush();
+}
+
+void ShapeWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum) {
+  csv_.finish();
+  if (last_means_.empty()) return;
+  if (dim_ == 2) {
+    sum.extra["mean_circularity_final"] = last_means_[0];
+    sum.extra["mean_aspect_ratio_final"] = last_means_[1];
+  } else {
+    sum.extra["mean_sphericity_final"] = last_means_[0];
+    sum.extra["mean_zingg_ei_final"] = last_means_[1];
+    sum.extra["mean_zingg_fi_final"] = last_means_[2];
+  }
 }
 
 VtkWriter::VtkWriter(const std::string& dir, long every, bool final_state, long resume_step)
@@ -322,8 +408,18 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   std::vector<std::vector<int>> polys2d;
   std::vector<long> cell_id, cell_gen;
   std::vector<double> cell_d;
+  std::vector<std::array<double, 3>> cell_shape;
+  std::map<const Shape*, GrainShapeMetrics> metrics;
   for (const auto& g : sim.grains()) {
     const int base = static_cast<int>(pts.size());
+    auto mit = metrics.find(g.shape.get());
+    if (mit == metrics.end()) mit = metrics.emplace(g.shape.get(), grain_shape_metrics(*g.shape)).first;
+    const GrainShapeMetrics& gm = mit->second;
+    // VTK readers take NaN, but no output of crumble holds one: -1 marks "no descriptor".
+    auto val = [](double v) { return std::isfinite(v) ? v : -1.0; };
+    const std::array<double, 3> shp = g.shape->dimension() == 2
+                                          ? std::array<double, 3>{val(gm.circularity), val(gm.aspect_ratio), val(gm.sieve_size)}
+                                          : std::array<double, 3>{val(gm.sphericity), val(gm.elongation), val(gm.flatness)};
     if (g.shape->dimension() == 3) {
       const TriMesh& m = g.shape->mesh();
       for (const auto& v : m.vertices) pts.push_back(g.to_world(v));
@@ -332,6 +428,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
         cell_id.push_back(g.id);
         cell_gen.push_back(g.generation);
         cell_d.push_back(g.shape->equivalent_diameter());
+        cell_shape.push_back(shp);
       }
     } else {
       const auto& o = g.shape->outline();
@@ -344,6 +441,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
       cell_id.push_back(g.id);
       cell_gen.push_back(g.generation);
       cell_d.push_back(g.shape->equivalent_diameter());
+      cell_shape.push_back(shp);
     }
   }
   std::ostringstream os;
@@ -370,6 +468,13 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   for (long v : cell_gen) os << v << '\n';
   os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"diameter\" format=\"ascii\">\n";
   for (double v : cell_d) os << v << '\n';
+  const bool two_d = sim.context().dimension == 2;
+  const char* shape_names[3] = {two_d ? "circularity" : "sphericity", two_d ? "aspect_ratio" : "zingg_ei",
+                                two_d ? "sieve_size" : "zingg_fi"};
+  for (int k = 0; k < 3; ++k) {
+    os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"" << shape_names[k] << "\" format=\"ascii\">\n";
+    for (const auto& v : cell_shape) os << v[k] << '\n';
+  }
   os << "</DataArray>\n</CellData>\n</Piece>\n</PolyData>\n</VTKFile>\n";
   char name[64];
   std::snprintf(name, sizeof name, "grains_%08ld.vtp", s.step);

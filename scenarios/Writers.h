@@ -1,7 +1,9 @@
 // Output writers, attached to the Simulation as Observers. Every file is written to a
 // temporary name and renamed into place when complete (no half-written results).
 #pragma once
+#include <cmath>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -70,28 +72,59 @@ class EventsWriter : public Observer {
 };
 
 // psd.csv: particle size distribution by mass (removed fines counted in the finest bin)
-// when the platen stress first reaches each requested level, and at the end.
+// when the platen stress first reaches each requested level (`level_<Pa>`), when the axial
+// strain first reaches each requested strain (`strain_<value>`), and at the end.
 class PsdWriter : public Observer {
  public:
-  // resume_stress >= 0: keep the tables of the earlier run up to that stress.
-  PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress = -1);
+  // resume_stress >= 0: keep the tables of the earlier run up to that stress (and strain).
+  PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress = -1,
+            std::vector<double> strain_levels = {}, double resume_strain = -1);
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
 
  private:
-  void table(const Simulation& sim, double stress, const char* label);
+  void table(const Simulation& sim, const RunState& s, const std::string& label);
   void write() const;
   std::string dir_;
-  std::vector<double> levels_;
-  std::size_t next_ = 0;
+  std::vector<double> levels_, strains_;
+  std::size_t next_ = 0, next_strain_ = 0;
   std::string rows_;
   double d_max_ = 0;
   bool resumed_ = false;
 };
 
+// Shape descriptors of one grain (geometry/ShapeMetrics.h): 2D circularity (Harmon et al.
+// 2020 eq. 23), best-fit-ellipse aspect ratio and sieve size (eq. 21) from the outline; 3D
+// Wadell sphericity and Zingg EI, FI from the surface mesh (its own mass properties, so
+// area and volume belong to the same surface). Unused fields stay NaN.
+struct GrainShapeMetrics {
+  double circularity = std::nan(""), aspect_ratio = std::nan(""), sieve_size = std::nan("");
+  double sphericity = std::nan(""), elongation = std::nan(""), flatness = std::nan("");
+};
+GrainShapeMetrics grain_shape_metrics(const Shape& shape);
+
+// shape.csv: number means of the grains' shape descriptors against strain and stress, one row
+// per series sample (time_s, step, axial_strain, platen_stress_Pa, grains, then 2D
+// mean_circularity, mean_aspect_ratio, mean_sieve_size_m; 3D mean_sphericity, mean_EI,
+// mean_FI). Metrics are computed once per Shape (shared, immutable) and cached while in use.
+class ShapeWriter : public Observer {
+ public:
+  // resume_step >= 0: continue the rows of a run resumed at that step.
+  ShapeWriter(const std::string& dir, int dimension, long resume_step = -1);
+  void on_sample(const Simulation& sim, const RunState& s) override;
+  void on_finish(const Simulation&, const RunState&, RunSummary& sum) override;
+
+ private:
+  int dim_;
+  CsvStream csv_;
+  long last_step_ = -1;
+  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> cache_;
+  std::vector<double> last_means_;
+};
+
 // grains_NNNNNN.vtp snapshots (grain surfaces in world coordinates with id, generation,
-// diameter) and grains.pvd, for ParaView.
+// diameter and the shape descriptors of GrainShapeMetrics) and grains.pvd, for ParaView.
 class VtkWriter : public Observer {
  public:
   // resume_step >= 0: keep the snapshots of the earlier run up to that step.
