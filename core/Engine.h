@@ -50,6 +50,10 @@ class Engine {
   virtual void step(double dt) = 0;
   // Largest stable time step for explicit engines (infinity when the engine has none).
   virtual double max_stable_dt() const;
+  // Multiply every friction coefficient (grain–grain and wall) by `scale` until called again
+  // (packing generation: frictionless settling gives a dense packing). Returns false when
+  // the engine cannot, which is the default for scale != 1.
+  virtual bool set_friction_scale(double scale) { return scale == 1.0; }
 
   // Copy engine poses and velocities into the records (matched by id).
   virtual void read_state(std::span<Grain> grains) const = 0;

@@ -123,6 +123,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     spec.settle_settings.dt = st.number("dt", 0.0, 0.0);
     spec.settle_settings.tolerance = st.positive("tolerance", 1e-3);
     spec.settle_settings.window = st.positive("window", 0.01);
+    spec.settle_settings.friction_scale = st.number("friction_scale", 1.0, 0.0, 1.0);
 
     std::vector<double> diam;
     std::vector<std::size_t> pick;
@@ -315,6 +316,9 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
   const long window = std::max(1L, std::lround(ss.window / dt));
   const long max_steps = std::max(window, std::lround(ss.max_time / dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
+  if (!e.set_friction_scale(ss.friction_scale))
+    throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
+                                                            "' cannot change friction while settling; use 1 or lsdem");
   const long guard_every = std::max(1L, sim.settings().sample_every);
   res.converged = false;
   while (steps < max_steps) {
@@ -338,6 +342,7 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
     }
   }
   res.steps = steps;
+  e.set_friction_scale(1.0);
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
   return res;

@@ -39,6 +39,7 @@ struct SettleSettings {
   double dt = 0;              // s; 0 = the scenario's first time step (capped by the engine's bound)
   double tolerance = 1e-3;    // platen travel per window, relative to the mean diameter
   double window = 0.01;       // s between checks
+  double friction_scale = 1;  // friction × this while settling (0: frictionless, a denser packing)
 };
 
 struct PackingSpec {

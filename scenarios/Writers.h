@@ -112,6 +112,7 @@ class ShapeWriter : public Observer {
  public:
   // resume_step >= 0: continue the rows of a run resumed at that step.
   ShapeWriter(const std::string& dir, int dimension, long resume_step = -1);
+  void on_start(const Simulation& sim, const RunState& s) override { on_sample(sim, s); }  // the strain-0 row
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation&, const RunState&, RunSummary& sum) override;
 

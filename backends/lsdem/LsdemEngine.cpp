@@ -645,12 +645,12 @@ void LsdemEngine::compute_forces(double dt) {
         const Material& mb = ctx_.materials[B.material];
         if (it.shape_wall) {
           L.kn = s_.wall_kn;
-          L.mu = ma.wall_friction;
+          L.mu = ma.wall_friction * friction_scale_;
           L.mstar = A.m;
           if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
         } else {
           L.kn = s_.kn;
-          L.mu = std::min(ma.friction, mb.friction);
+          L.mu = std::min(ma.friction, mb.friction) * friction_scale_;
           L.mstar = A.m * B.m / (A.m + B.m);
         }
         if (L.hertz && !it.shape_wall) {
@@ -684,7 +684,7 @@ void LsdemEngine::compute_forces(double dt) {
           }
         }
         L.kn = s_.wall_kn;
-        L.mu = ma.wall_friction;
+        L.mu = ma.wall_friction * friction_scale_;
         L.mstar = A.m;
         if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
         it.pen = static_cast<long>(P.size());

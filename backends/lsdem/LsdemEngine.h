@@ -112,6 +112,10 @@ class LsdemEngine final : public Engine {
 
   void step(double dt) override;
   double max_stable_dt() const override;
+  bool set_friction_scale(double scale) override {
+    friction_scale_ = scale;
+    return true;
+  }
 
   void read_state(std::span<Grain> grains) const override;
   std::vector<Contact> contacts() const override { return contacts_; }
@@ -193,6 +197,7 @@ class LsdemEngine final : public Engine {
   std::vector<Contact> contacts_;
   PlatenCommand platen_cmd_;
   double platen_pos_ = 0, platen_vel_ = 0, platen_force_ = 0, floor_force_ = 0;
+  double friction_scale_ = 1;  // set_friction_scale (settling)
   LsdemStats stats_;
 };
 
