@@ -172,6 +172,13 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     builder = fentry.make(fc, ctx);
   }
   auto engine = eentry.make(ec, ctx);
+  // Frictionless settling needs an engine that can change friction (validate says so too).
+  if (sc.packing.settle && sc.packing.settle_settings.friction_scale != 1.0) {
+    if (!engine->set_friction_scale(sc.packing.settle_settings.friction_scale))
+      throw ConfigError("/packing/settle/friction_scale",
+                        "the engine '" + et + "' cannot change friction while settling; use 1 or lsdem");
+    engine->set_friction_scale(1.0);
+  }
   auto model = bentry.make(bc, ctx);
   accept_sibling_options(ec, engines(), et, ctx, sc.notes);
   accept_sibling_options(bc, breakage_models(), bt, ctx, sc.notes);

@@ -105,6 +105,12 @@ TEST(HarmonOedometer, FrictionScaleNeedsAnEngineThatSupportsIt) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("/packing/settle/friction_scale"), std::string::npos) << r.output;
 #endif
+#if CRUMBLE_WITH_BULLET
+  const auto v = run_cli(std::string("validate ") + CRUMBLE_SOURCE_DIR +
+                         "/scenarios/oedometer_rigid_quick.json --set packing.settle.friction_scale=0");
+  EXPECT_EQ(v.status, 2) << v.output;
+  EXPECT_NE(v.output.find("/packing/settle/friction_scale"), std::string::npos) << v.output;
+#endif
   const auto bad = run_cli(std::string("validate ") + CRUMBLE_SOURCE_DIR +
                            "/scenarios/oedometer_harmon_2d_quick.json --set packing.settle.friction_scale=2");
   EXPECT_EQ(bad.status, 2) << bad.output;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <string>
 
@@ -93,4 +94,66 @@ TEST(PsdWriter, LevelNotReachedIsWrittenWithTheFinalState) {
   EXPECT_NE(psd.find("\nfinal,"), std::string::npos) << psd;
   // Every table has the same 25 sieves: initial, two levels, final.
   EXPECT_EQ(read_csv((f.dir / "psd.csv").string()).size(), 1u + 4 * 25);
+}
+
+TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
+  Fixture f("psd_strain");
+  {
+    PsdWriter w(f.dir.string(), {}, -1, {0.10, 0.05});
+    RunState s;
+    w.on_start(*f.sc.sim, s);
+    s.axial_strain = 0.051;
+    s.platen_stress = 2e6;
+    w.on_sample(*f.sc.sim, s);
+    RunSummary sum;
+    w.on_finish(*f.sc.sim, s, sum);  // 0.10 never reached
+  }
+  std::string psd = crumble::testing_support::slurp(f.dir / "psd.csv");
+  EXPECT_EQ(psd.rfind("label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain\n", 0), 0u);
+  EXPECT_NE(psd.find("\nstrain_0.05,2000000,"), std::string::npos) << psd;
+  EXPECT_NE(psd.find(",0.051\n"), std::string::npos);
+  EXPECT_NE(psd.find("\nstrain_0.1_not_reached_final_state,"), std::string::npos);
+  // Resumed at strain 0.06: the 5 % table is kept (not written twice), the 10 % one follows.
+  PsdWriter r(f.dir.string(), {}, 2e6, {0.05, 0.10}, 0.06);
+  RunState s;
+  s.axial_strain = 0.06;
+  r.on_start(*f.sc.sim, s);
+  s.axial_strain = 0.12;
+  r.on_sample(*f.sc.sim, s);
+  RunSummary sum;
+  r.on_finish(*f.sc.sim, s, sum);
+  const auto rows = read_csv((f.dir / "psd.csv").string());
+  std::map<std::string, int> n;
+  for (std::size_t i = 1; i < rows.size(); ++i) ++n[rows[i][0]];
+  EXPECT_EQ(n["initial"], 25);
+  EXPECT_EQ(n["strain_0.05"], 25);
+  EXPECT_EQ(n["strain_0.1"], 25);
+  EXPECT_EQ(n["final"], 25);
+  EXPECT_EQ(n.count("strain_0.1_not_reached_final_state"), 0u);
+}
+
+TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
+  // Two spheres of the 3D fixture: icosphere meshes (42 vertices) have sphericity < 1 and
+  // isotropic inertia, so EI = FI = 1.
+  Fixture f("shape");
+  {
+    ShapeWriter w(f.dir.string(), 3);
+    RunState s;
+    w.on_start(*f.sc.sim, s);
+    s.step = 10;
+    s.axial_strain = 0.01;
+    w.on_sample(*f.sc.sim, s);
+    w.on_sample(*f.sc.sim, s);  // same step: no second row
+    RunSummary sum;
+    w.on_finish(*f.sc.sim, s, sum);
+    EXPECT_NEAR(sum.extra["mean_zingg_ei_final"], 1.0, 1e-9);
+  }
+  const auto rows = read_csv((f.dir / "shape.csv").string());
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0][5], "mean_sphericity");
+  const double sph = std::stod(rows[2][5]);
+  EXPECT_GT(sph, 0.95);
+  EXPECT_LT(sph, 1.0);
+  EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 1e-9);
+  EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 1e-9);
 }
