@@ -107,6 +107,10 @@ GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, co
         if (ia->second->origin >= 0 && ia->second->origin == ib->second->origin) continue;
         d = std::min(d, ib->second->shape->equivalent_diameter());
       }
+      if (d < s.small_grain_fraction * at.reference_diameter) {
+        if (c.overlap > s.max_overlap_fraction * d) ++r.small_grain_overlaps;
+        continue;
+      }
       r.max_overlap_fraction = std::max(r.max_overlap_fraction, c.overlap / d);
       if (c.overlap > s.max_overlap_fraction * d) {
         std::ostringstream os;

@@ -73,6 +73,8 @@ GrainId Simulation::add_grain(Grain g) {
   model_->assign_strength(g, ctx_.materials[g.material], r);
   // The kinetic energy a grain starts with counts as energy put in (guards).
   energy_in_ += kinetic_energy(std::span<const Grain>(&g, 1), ctx_.materials, ctx_.dimension);
+  // Running mean diameter of the initial grains (guards' reference size).
+  reference_diameter_ += (g.shape->equivalent_diameter() - reference_diameter_) / static_cast<double>(grains_.size() + 1);
   engine_->add_grain(g);
   grains_.push_back(std::move(g));
   return grains_.back().id;
@@ -96,6 +98,8 @@ SimulationState Simulation::saved_state() const {
   s.schedule_last_stress = schedule_.last_stress();
   s.max_platen_stress = max_platen_stress_;
   s.energy_in = energy_in_;
+  s.reference_diameter = reference_diameter_;
+  s.small_grain_overlaps = guard_max_.small_grain_overlaps;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -127,6 +131,8 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
   energy_in_ = st.energy_in;
+  reference_diameter_ = st.reference_diameter;
+  guard_max_.small_grain_overlaps = st.small_grain_overlaps;
   resumed_from_ = st;
   resumed_ = true;
 }
@@ -161,6 +167,7 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
   if (!full || !settings_.guards.enabled) return;
   sync_grains();
+  at.reference_diameter = reference_diameter_;
   // Budget: what entered so far, plus every grain's weight falling the container's height
   // (at least 1 m/s² so that a scene without gravity still has a scale).
   double mass = 0;
@@ -171,6 +178,12 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
       check_invariants(settings_.guards, at, container_, ctx_.dimension, st.platen_height, grains_, ctx_.materials, cs);
   guard_max_.max_overlap_fraction = std::max(guard_max_.max_overlap_fraction, r.max_overlap_fraction);
   guard_max_.energy_ratio = std::max(guard_max_.energy_ratio, r.energy_ratio);
+  if (r.small_grain_overlaps > 0 && guard_max_.small_grain_overlaps == 0)
+    std::cerr << "warning: a grain smaller than " << settings_.guards.small_grain_fraction
+              << " of the initial mean diameter overlaps a neighbour by more than "
+              << settings_.guards.max_overlap_fraction << " of its size at step " << step_
+              << " (counted in summary.json: guard_small_grain_overlaps)\n";
+  guard_max_.small_grain_overlaps += r.small_grain_overlaps;
 }
 
 RunState Simulation::state() const {
@@ -290,6 +303,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.dt_reductions = dt_reductions_;
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
+  sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
   auto t0 = Clock::now();
   for (auto& o : observers_) o->on_finish(*this, st, sum);
   timings_.observers += seconds_since(t0);

@@ -50,6 +50,8 @@ struct SimulationState {
   std::size_t grains_initial = 0;
   double mass_initial = 0, void_ratio_initial = 0, max_platen_stress = 0;
   double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
+  double reference_diameter = 0;  // m: mean diameter of the initial grains (guards)
+  long small_grain_overlaps = 0;
 };
 
 class Simulation {
@@ -133,6 +135,7 @@ class Simulation {
   std::size_t initial_grains_ = 0;
   double initial_mass_ = 0, initial_void_ratio_ = 0;
   double energy_in_ = 0;
+  double reference_diameter_ = 0;
   GuardReading guard_max_;
 };
 

@@ -194,6 +194,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     g.enabled = gc.boolean("enabled", g.enabled);
     g.max_overlap_fraction = gc.number("max_overlap_fraction", g.max_overlap_fraction, 0.0, 1.0);
     g.energy_factor = gc.number("energy_factor", g.energy_factor, 0.0);
+    g.small_grain_fraction = gc.number("small_grain_fraction", g.small_grain_fraction, 0.0, 1.0);
     g.containment = gc.boolean("containment", g.containment);
   }
   ss.threads = sc.threads;
