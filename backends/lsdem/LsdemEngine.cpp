@@ -158,8 +158,7 @@ void LsdemEngine::set_container(const Container& c) {
     throw std::invalid_argument("lsdem: container sizes and platen mass must be >= 0");
   container_ = c;
   has_container_ = true;
-  platen_pos_ = c.height;
-  platen_vel_ = 0;
+  platen_.reset(c.height);
 }
 
 LsdemEngine::ShapeData& LsdemEngine::shape_data(const Shape::Ptr& s) {
@@ -336,22 +335,8 @@ double LsdemEngine::max_stable_dt() const {
 }
 
 std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
-  std::vector<Wall> w;
-  if (!has_container_) return w;
-  const int u = up();
-  Vec3 e_up, e_x{1, 0, 0}, e_y{0, 1, 0};
-  e_up[u] = 1;
-  w.push_back({kFloor, {}, e_up, {}});
-  if (container_.height > 0) w.push_back({kPlaten, e_up * platen_pos_, -e_up, e_up * platen_vel_});
-  if (container_.lx > 0) {
-    w.push_back({kWallXMin, {}, e_x, {}});
-    w.push_back({kWallXMax, e_x * container_.lx, -e_x, {}});
-  }
-  if (ctx_.dimension == 3 && container_.ly > 0) {
-    w.push_back({kWallYMin, {}, e_y, {}});
-    w.push_back({kWallYMax, e_y * container_.ly, -e_y, {}});
-  }
-  return w;
+  if (!has_container_) return {};
+  return container_planes(container_, ctx_.dimension, platen_.position(), platen_.velocity());
 }
 
 // ---- One step ----
@@ -801,21 +786,15 @@ void LsdemEngine::integrate(double dt) {
   }
   // Platen along the vertical axis.
   if (has_container_ && container_.height > 0) {
-    if (platen_cmd_.mode == PlatenCommand::Mode::Velocity) {
-      platen_vel_ = platen_cmd_.value;
-    } else {
-      double M = container_.platen_mass * s_.mass_scale;
-      if (!(M > 0)) {
-        M = 0;
-        for (const auto& b : bodies_) M += b.m;
-      }
-      if (M > 0) {
-        // Grains push it up with platen_force_, the command pushes it down.
-        const double acc = (platen_force_ - platen_cmd_.value) / M - s_.global_damping * platen_vel_;
-        platen_vel_ += acc * dt;
-      }
+    // Mass rule and semi-implicit update shared by every engine (core/Platen.h); the
+    // global damping acts on the platen too.
+    double M = 0;
+    if (platen_.force_driven() && !(container_.platen_mass > 0)) {
+      for (const auto& b : bodies_) M += b.m;  // scaled masses
+      M /= s_.mass_scale;
     }
-    platen_pos_ += platen_vel_ * dt;
+    M = platen_mass(container_, M, s_.mass_scale);
+    platen_.advance(dt, platen_force_, M, s_.global_damping);
   }
 }
 

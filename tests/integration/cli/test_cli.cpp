@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scenarios/Registry.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
@@ -167,6 +168,16 @@ TEST(Cli, ShapeReportsResolution) {
 // the cross product is the point of the project).
 class Combination : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
+// Every registered engine that runs 3D scenarios (the single-grain scene is 3D): a new
+// engine is tested by registering it.
+std::vector<std::string> three_d_engines() {
+  std::vector<std::string> names;
+  for (const auto& e : crumble::engines().entries())
+    for (int d : e.dimensions)
+      if (d == 3) names.push_back(e.name);
+  return names;
+}
+
 TEST_P(Combination, SingleGrainRuns) {
   const auto [engine, model] = GetParam();
   const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / ("combo_" + engine + "_" + model);
@@ -191,7 +202,7 @@ TEST_P(Combination, SingleGrainRuns) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EnginesModels, Combination,
-                         ::testing::Combine(::testing::Values("bullet", "lsdem"),
+                         ::testing::Combine(::testing::ValuesIn(three_d_engines()),
                                             ::testing::Values("none", "peridynamics")),
                          [](const auto& info) { return std::get<0>(info.param) + "_" + std::get<1>(info.param); });
 
