@@ -1,26 +1,48 @@
 // The breakage-model seam. `analyse` is pure and thread-safe: the Simulation calls it for
-// several grains at once (one grain per task).
+// several grains at once (one grain per task). The model owns its per-grain strength
+// values (Grain::strength), its screening and schedule defaults, and the figures it
+// reports for each analysis.
 #pragma once
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/Contact.h"
 #include "core/Fracture.h"
 #include "core/Grain.h"
 #include "core/Rng.h"
+#include "core/Schedule.h"
+#include "core/Screening.h"
 
 namespace crumble {
 
-struct Analysis {
+// The outcome of one breakage analysis of one grain.
+struct BreakageAnalysis {
   bool broken = false;
   std::optional<Fracture> fracture;  // set when broken
   std::string outcome;               // short word for events.csv: intact, split, no_load, ...
-  double criterion = 0;              // model's measure (stress in Pa, force in N, ...)
   double load = 0;                   // largest contact force considered, N
-  // Cost figures (peridynamics fills these; others may leave them 0).
-  long points = 0, bonds = 0, steps = 0;
-  double wall_ms = 0;
+  double wall_ms = 0;                // wall time of the analysis
+  // Model-specific figures, named with their unit (e.g. "points", "force_at_split_N",
+  // "sigma_1_Pa"); the names are those of BreakageModel::figure_names().
+  std::vector<std::pair<std::string, double>> figures;
+
+  void set_figure(const std::string& name, double v) {
+    for (auto& f : figures)
+      if (f.first == name) {
+        f.second = v;
+        return;
+      }
+    figures.emplace_back(name, v);
+  }
+  // The figure's value, or `def` when the model did not set it.
+  double figure(const std::string& name, double def = 0) const {
+    for (const auto& f : figures)
+      if (f.first == name) return f.second;
+    return def;
+  }
 };
 
 class BreakageModel {
@@ -37,7 +59,17 @@ class BreakageModel {
 
   // Decide whether `g`, loaded by `contacts` (forces on g, world frame), breaks. The
   // fracture is expressed in g's body frame.
-  virtual Analysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const = 0;
+  virtual BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const = 0;
+
+  // The figures analyse() reports, in a fixed order (one events.csv column each).
+  virtual std::vector<std::string> figure_names() const { return {}; }
+  // Screening and schedule this model's method prescribes; a scenario's "screening" and
+  // "schedule" objects override each value.
+  virtual ScreeningSettings default_screening() const { return {}; }
+  virtual ScheduleSettings default_schedule() const { return {0.0, 100}; }
+  // Screening force of g, N: a grain whose largest contact force is below it is not
+  // analysed (when ScreeningSettings::force_threshold is on).
+  virtual double threshold_force(const Grain&) const { return 0; }
 };
 
 }  // namespace crumble

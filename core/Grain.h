@@ -1,6 +1,9 @@
 #pragma once
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <stdexcept>
+#include <string>
 
 #include "geometry/Shape.h"
 
@@ -19,11 +22,24 @@ struct Material {
 };
 
 // Per-grain strength, sampled once by the breakage model and inherited by children with
-// the Weibull size effect. `value` is model-specific (G_c in J/m² for peridynamics, a
-// strength in Pa for the stress criteria); `threshold_force` is the screening force (N).
+// the Weibull size effect. The model owns the names and their meaning; each name ends in
+// its unit (peridynamics: "gc_J_m2", "threshold_force_N"; stress criteria: "strength_Pa",
+// "tensile_strength_Pa"). Checkpoints save and restore every value by name.
 struct StrengthState {
-  double value = 0;
-  double threshold_force = 0;
+  std::map<std::string, double> values;
+
+  bool has(const std::string& name) const { return values.count(name) != 0; }
+  // Throws std::out_of_range naming the value when the model never set it.
+  double get(const std::string& name) const {
+    auto it = values.find(name);
+    if (it == values.end()) throw std::out_of_range("grain strength has no value '" + name + "'");
+    return it->second;
+  }
+  double get_or(const std::string& name, double def) const {
+    auto it = values.find(name);
+    return it == values.end() ? def : it->second;
+  }
+  void set(const std::string& name, double v) { values[name] = v; }
 };
 
 struct Grain {

@@ -34,7 +34,7 @@ struct AnalysisRecord {
   GrainId grain = -1;
   double diameter = 0;
   int generation = 0;
-  Analysis analysis;  // fracture dropped
+  BreakageAnalysis analysis;  // fracture dropped
 };
 
 struct BreakageEvent {
@@ -50,7 +50,7 @@ struct BreakageEvent {
   std::vector<double> child_diameters;
   double removed_volume = 0;  // fines taken out of the engine
   std::string fragment_method;
-  Analysis analysis;  // fracture dropped
+  BreakageAnalysis analysis;  // fracture dropped
 };
 
 struct Timings {

@@ -4,7 +4,18 @@
 
 namespace crumble {
 
-ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s) {
+ScreeningSettings zhu_zhao_screening() {
+  ScreeningSettings s;
+  s.min_diameter = 0.3e-3;
+  s.force_threshold = true;
+  s.max_unbalanced_force_ratio = 0.02;
+  s.max_unbalanced_moment_ratio = 0.2;
+  s.min_contacts = 2;
+  return s;
+}
+
+ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s,
+                       double threshold_force) {
   ScreeningResult r;
   if (g.shape->equivalent_diameter() < s.min_diameter) {
     r.reason = "too_small";
@@ -27,7 +38,7 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
     }
   }
   mean /= static_cast<double>(contacts.size());
-  if (s.force_threshold && r.max_force < g.strength.threshold_force) {
+  if (s.force_threshold && r.max_force < threshold_force) {
     r.reason = "below_threshold";
     return r;
   }

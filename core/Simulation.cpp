@@ -330,7 +330,7 @@ void Simulation::check_breakage(const RunState& st) {
   }
   std::vector<std::size_t> candidates;
   for (std::size_t i = 0; i < grains_.size(); ++i)
-    if (screen(grains_[i], on[i], screening_).selected) candidates.push_back(i);
+    if (screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i])).selected) candidates.push_back(i);
   timings_.screening += seconds_since(t0);
   if (candidates.empty()) return;
 
@@ -339,7 +339,7 @@ void Simulation::check_breakage(const RunState& st) {
   // number of threads.
   t0 = Clock::now();
   const long n = static_cast<long>(candidates.size());
-  std::vector<Analysis> results(n);
+  std::vector<BreakageAnalysis> results(n);
   std::vector<FragmentResult> frags(n);
   std::vector<std::string> errors(n);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(std::max(1, settings_.threads))

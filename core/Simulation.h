@@ -14,29 +14,10 @@
 #include "core/Loading.h"
 #include "core/Observer.h"
 #include "core/OpenScene.h"
+#include "core/Schedule.h"
 #include "core/Screening.h"
 
 namespace crumble {
-
-// Breakage checks every `every_stress` Pa of platen stress (seeds/000: 0.08 MPa) and/or
-// every `every_steps` steps; 0 disables a rule.
-struct ScheduleSettings {
-  double every_stress = 0;
-  long every_steps = 0;
-};
-
-class Schedule {
- public:
-  explicit Schedule(ScheduleSettings s) : s_(s) {}
-  bool due(long step, double stress);
-  const ScheduleSettings& settings() const { return s_; }
-  double last_stress() const { return last_stress_; }
-  void set_last_stress(double s) { last_stress_ = s; }
-
- private:
-  ScheduleSettings s_;
-  double last_stress_ = 0;
-};
 
 struct TimeStepRule {
   double below_stress;  // Pa: applies while the measured stress is below this

@@ -96,8 +96,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
                       {"orientation", quat(g.orientation)},
                       {"velocity", vec(g.velocity)},
                       {"angular_velocity", vec(g.angular_velocity)},
-                      {"strength", g.strength.value},
-                      {"threshold_force", g.strength.threshold_force},
+                      {"strength", Json(g.strength.values)},
                       {"crush_count", g.crush_count}});
   }
   j["shapes"] = shapes;
@@ -155,8 +154,15 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
     g.orientation = Quat{q[0], q[1], q[2], q[3]}.normalized();
     g.velocity = gc.vec3("velocity", {});
     g.angular_velocity = gc.vec3("angular_velocity", {});
-    g.strength.value = gc.number("strength", 0);
-    g.strength.threshold_force = gc.number("threshold_force", 0);
+    // Every named strength value of the model (Grain::strength), by name.
+    if (gc.is_object("strength")) {
+      Config sv = gc.child("strength");
+      for (auto it = sv.doc().begin(); it != sv.doc().end(); ++it) g.strength.set(it.key(), sv.number(it.key()));
+    } else if (gc.has("strength")) {
+      // Checkpoints written before strength values had names came from peridynamics only.
+      g.strength.set("gc_J_m2", gc.number("strength", 0));
+      g.strength.set("threshold_force_N", gc.number("threshold_force", 0));
+    }
     g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
     cp.grains.push_back(std::move(g));
   }

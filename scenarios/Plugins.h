@@ -15,7 +15,7 @@ namespace crumble {
 
 // Bumped whenever a seam interface (core/Engine.h, BreakageModel.h, FragmentBuilder.h,
 // Observer.h) or the registrar changes.
-inline constexpr int kPluginAbi = 1;
+inline constexpr int kPluginAbi = 2;  // 2: BreakageAnalysis, named strength values, model-owned screening
 
 struct PluginRegistrar {
   Table<EngineFactory>& engines;

@@ -11,6 +11,7 @@
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
 #include "breakage/peridynamics/Peridynamics.h"
+#include "breakage/stress/StressModel.h"
 #include "geometry/level_set/LevelSetBuilder.h"
 
 namespace crumble {
@@ -64,6 +65,9 @@ Table<ModelFactory>& breakage_models() {
     t.add({"none", "grains never break (rigid runs)",
            [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}});
     t.add({"peridynamics", "LPS peridynamics with critical-stretch bonds (Zhu & Zhao 2019)", make_peridynamics, {}, {3}});
+    t.add({"stress", "average-stress criterion, Weibull strengths, planar split through the strongest contacts "
+                     "(Harmon et al. 2020, eqs. 5-13, 18-20)",
+           make_stress, stress::criterion_names(), {2, 3}});
     return t;
   }();
   return t;

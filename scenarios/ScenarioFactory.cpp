@@ -250,12 +250,13 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     lc.fail("mode", "strain_rate loading needs a stop: stop_stress, stop_force, stop_strain, "
                     "simulation.max_steps or simulation.stop_after_breakage_events");
 
-  ScheduleSettings sch;
+  // The breakage model's method fixes the defaults; the scenario may override each value.
+  ScheduleSettings sch = model->default_schedule();
   Config schc = root.child("schedule");
-  sch.every_stress = schc.number("every_stress", 0.08e6, 0.0);
-  sch.every_steps = schc.integer("every_steps", 0, 0);
+  sch.every_stress = schc.number("every_stress", sch.every_stress, 0.0);
+  sch.every_steps = schc.integer("every_steps", sch.every_steps, 0);
 
-  ScreeningSettings scr;
+  ScreeningSettings scr = model->default_screening();
   Config scrc = root.child("screening");
   scr.min_diameter = scrc.number("min_diameter", scr.min_diameter, 0.0);
   scr.force_threshold = scrc.boolean("force_threshold", scr.force_threshold);

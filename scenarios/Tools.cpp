@@ -33,9 +33,12 @@ class CrushingRecorder : public Observer {
   void on_breakage(const Simulation&, const BreakageEvent& e) override {
     if (done_) return;
     done_ = true;
-    // The model reports the force reached when the grain split (criterion, N); fall back
-    // on the largest contact force it was loaded with.
-    force_ = e.analysis.criterion > 0 ? e.analysis.criterion : e.analysis.load;
+    // The model's force at failure: peridynamics reports the force reached when the grain
+    // split (force_at_split_N); other models fail under the contact forces given, so the
+    // largest of them. Stress models also give the equivalent stress at failure.
+    const double split = e.analysis.figure("force_at_split_N", 0);
+    force_ = split > 0 ? split : e.analysis.load;
+    stress_ = e.analysis.figure("equivalent_stress_Pa", -1);
     platen_ = e.platen_stress;
     diam_ = e.child_diameters;
   }
@@ -44,13 +47,14 @@ class CrushingRecorder : public Observer {
     sum.extra["max_platen_force_N"] = max_force_;
     if (!done_) return;
     sum.extra["crushing_force_N"] = force_;
+    if (stress_ >= 0) sum.extra["crushing_stress_Pa"] = stress_;
     sum.extra["characteristic_strength_Pa"] = force_ / (d_ * d_);
     sum.extra["fragment_count"] = static_cast<double>(diam_.size());
     sum.extra_arrays["fragment_diameters_m"] = diam_;
   }
 
  private:
-  double d_ = 0, force_ = 0, platen_ = 0, max_force_ = 0;
+  double d_ = 0, force_ = 0, platen_ = 0, max_force_ = 0, stress_ = -1;
   bool done_ = false;
   std::vector<double> diam_;
 };
@@ -118,7 +122,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   const bool resumed = sim.resumed();
   const SimulationState st = sim.saved_state();
   sim.add_observer(std::make_shared<SeriesWriter>(out, resumed ? st.step : -1));
-  sim.add_observer(std::make_shared<EventsWriter>(out, resumed ? st.step : -1L));
+  sim.add_observer(std::make_shared<EventsWriter>(out, sim.model().figure_names(), resumed ? st.step : -1L));
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));

@@ -119,20 +119,41 @@ void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
 
 void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
 
-EventsWriter::EventsWriter(const std::string& dir, long resume_step)
+namespace {
+std::string events_header(const std::vector<std::string>& figures) {
+  std::string h =
+      "time_s,step,platen_stress_Pa,grain,diameter_m,generation,wall_ms,outcome,max_force_N,children,child_volumes_m3,"
+      "child_diameters_m,removed_volume_m3,fragment_method";
+  for (const auto& f : figures) h += "," + f;
+  return h;
+}
+}  // namespace
+
+EventsWriter::EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step)
     : dir_(dir),
-      csv_(dir + "/events.csv",
-           "time_s,platen_stress_Pa,grain,diameter_m,generation,points,bonds,steps,wall_ms,outcome,criterion,"
-           "max_force_N,children,child_volumes_m3,child_diameters_m,removed_volume_m3,fragment_method,step",
-           resume_step) {}
+      figures_(std::move(figure_names)),
+      csv_(dir + "/events.csv", events_header(figures_), resume_step) {}
+
+void EventsWriter::write_figures(const BreakageAnalysis& a) {
+  // Columns follow the declared names; a figure the model did not set this time is empty.
+  for (const auto& name : figures_) {
+    csv_.row() << ',';
+    for (const auto& [k, v] : a.figures)
+      if (k == name) {
+        check_finite(v, "figure in events.csv");
+        csv_.row() << v;
+        break;
+      }
+  }
+  csv_.row() << '\n';
+}
 
 void EventsWriter::flush_pending() {
   if (!has_pending_) return;
   const auto& r = pending_;
-  csv_.row() << r.time << ',' << r.platen_stress << ',' << r.grain << ',' << r.diameter << ',' << r.generation << ','
-             << r.analysis.points << ',' << r.analysis.bonds << ',' << r.analysis.steps << ',' << r.analysis.wall_ms
-             << ',' << r.analysis.outcome << ',' << r.analysis.criterion << ',' << r.analysis.load << ",0,,,0,,"
-             << r.step << '\n';
+  csv_.row() << r.time << ',' << r.step << ',' << r.platen_stress << ',' << r.grain << ',' << r.diameter << ',' << r.generation << ','
+             << r.analysis.wall_ms << ',' << r.analysis.outcome << ',' << r.analysis.load << ",0,,,0,";
+  write_figures(r.analysis);
   has_pending_ = false;
 }
 
@@ -157,11 +178,11 @@ void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
     vols << (i ? ";" : "") << e.child_volumes[i];
     diams << (i ? ";" : "") << e.child_diameters[i];
   }
-  csv_.row() << e.time << ',' << e.platen_stress << ',' << e.parent << ',' << e.parent_diameter << ',' << e.generation
-             << ',' << e.analysis.points << ',' << e.analysis.bonds << ',' << e.analysis.steps << ','
-             << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.criterion << ','
-             << e.analysis.load << ',' << e.children.size() << ',' << vols.str() << ',' << diams.str() << ','
-             << e.removed_volume << ',' << e.fragment_method << ',' << e.step << '\n';
+  csv_.row() << e.time << ',' << e.step << ',' << e.platen_stress << ',' << e.parent << ',' << e.parent_diameter << ',' << e.generation
+             << ',' << e.analysis.wall_ms << ',' << e.analysis.outcome << ',' << e.analysis.load << ','
+             << e.children.size() << ',' << vols.str() << ',' << diams.str() << ',' << e.removed_volume << ','
+             << e.fragment_method;
+  write_figures(e.analysis);
   csv_.row().flush();
 }
 
@@ -174,9 +195,18 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   // A breakage row has children or removed fines (every child can be a fine, leaving no
   // child in the engine); an analysis that did not break the grain has neither. Counting
   // children alone dropped those events, and the file disagreed with summary.json.
+  // Columns by name, so the layout may grow.
+  std::size_t children_col = 9, removed_col = 12, stress_col = 2;
+  if (!rows.empty())
+    for (std::size_t c = 0; c < rows[0].size(); ++c) {
+      if (rows[0][c] == "platen_stress_Pa") stress_col = c;
+      if (rows[0][c] == "children") children_col = c;
+      if (rows[0][c] == "removed_volume_m3") removed_col = c;
+    }
   for (std::size_t i = 1; i < rows.size(); ++i)
-    if (rows[i].size() > 15 && (std::atol(rows[i][12].c_str()) > 0 || std::atof(rows[i][15].c_str()) > 0))
-      ++per[static_cast<long>(std::floor(std::atof(rows[i][1].c_str()) / 1e6))];
+    if (rows[i].size() > std::max(children_col, removed_col) &&
+        (std::atol(rows[i][children_col].c_str()) > 0 || std::atof(rows[i][removed_col].c_str()) > 0))
+      ++per[static_cast<long>(std::floor(std::atof(rows[i][stress_col].c_str()) / 1e6))];
   std::ostringstream os;
   os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
   const long top = static_cast<long>(std::floor(std::max(0.0, s.platen_stress) / 1e6));

@@ -47,12 +47,13 @@ class SeriesWriter : public Observer {
   long last_step_ = -1;
 };
 
-// events.csv: one row per breakage analysis; breakage_per_mpa.csv: crushing events per
-// MPa of platen stress.
+// events.csv: one row per breakage analysis, the common columns first, then one column per
+// figure the model declares (BreakageModel::figure_names, in that order);
+// breakage_per_mpa.csv: crushing events per MPa of platen stress.
 class EventsWriter : public Observer {
  public:
   // resume_step >= 0: continue the rows of a run resumed at that step.
-  explicit EventsWriter(const std::string& dir, long resume_step = -1);
+  EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step = -1);
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
   // Every row of a step is on disk before the step's sample (and checkpoint) is written.
@@ -61,7 +62,9 @@ class EventsWriter : public Observer {
 
  private:
   void flush_pending();
+  void write_figures(const BreakageAnalysis& a);
   std::string dir_;
+  std::vector<std::string> figures_;
   CsvStream csv_;
   bool has_pending_ = false;
   AnalysisRecord pending_;

@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "backends/bullet/PrincipalAxes.h"
+#include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
 
 // Mixing the float and double builds of Bullet corrupts memory silently (METHODS.md §2).
@@ -25,8 +25,6 @@
 static_assert(sizeof(btScalar) == sizeof(double), "btScalar must be double (BT_USE_DOUBLE_PRECISION)");
 
 namespace crumble {
-
-using bullet_detail::principal_axes;
 
 namespace {
 

@@ -11,10 +11,11 @@ class NoBreakage : public BreakageModel {
  public:
   std::string name() const override { return "none"; }
   bool active() const override { return false; }
+  ScheduleSettings default_schedule() const override { return {0.0, 0}; }  // never checked
   void assign_strength(Grain&, const Material&, Rng&) const override {}
   void inherit_strength(const Grain&, Grain&, const Material&, Rng&) const override {}
-  Analysis analyse(const Grain&, const Material&, std::span<const Contact>) const override {
-    Analysis a;
+  BreakageAnalysis analyse(const Grain&, const Material&, std::span<const Contact>) const override {
+    BreakageAnalysis a;
     a.outcome = "intact";
     return a;
   }

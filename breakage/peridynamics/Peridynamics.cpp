@@ -289,30 +289,38 @@ void PeridynamicsModel::assign_strength(Grain& g, const Material&, Rng& rng) con
   const double d = g.shape->equivalent_diameter();
   const double gc = o_.weibull ? pd_sample_gc(o_, d, rng.uniform())
                                : o_.gc0 * std::pow(d / o_.d0, -6.0 / o_.weibull_modulus);  // eq. 15 from d0
-  g.strength.value = gc;
-  g.strength.threshold_force = pd_threshold_force(o_, gc, d);
+  g.strength.set(kGc, gc);
+  g.strength.set(kThreshold, pd_threshold_force(o_, gc, d));
 }
 
 void PeridynamicsModel::inherit_strength(const Grain& parent, Grain& child, const Material&, Rng&) const {
   require(parent.shape && child.shape, "grain without a shape");
-  require(parent.strength.value > 0, "parent grain has no G_c");
+  const double gc_parent = parent.strength.get_or(kGc, 0);
+  require(gc_parent > 0, "parent grain has no G_c");
   const double dp = parent.shape->equivalent_diameter(), dc = child.shape->equivalent_diameter();
-  const double gc = pd_child_gc(o_, parent.strength.value, dc, dp);
-  child.strength.value = gc;
-  child.strength.threshold_force = pd_threshold_force(o_, gc, dc);
+  const double gc = pd_child_gc(o_, gc_parent, dc, dp);
+  child.strength.set(kGc, gc);
+  child.strength.set(kThreshold, pd_threshold_force(o_, gc, dc));
 }
 
-Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const {
+BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
+                                            std::span<const Contact> contacts) const {
   const auto t0 = Clock::now();
-  Analysis a;
+  BreakageAnalysis a;
+  long points = 0, bonds = 0, steps = 0;
+  double force_at_split = 0;
   auto finish = [&](const std::string& outcome) {
     a.outcome = outcome;
+    a.figures = {{"points", static_cast<double>(points)},
+                 {"bonds", static_cast<double>(bonds)},
+                 {"steps", static_cast<double>(steps)},
+                 {"force_at_split_N", force_at_split}};
     a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return a;
   };
   require(g.shape != nullptr, "grain " + std::to_string(g.id) + " has no shape");
   require(g.shape->dimension() == 3, "needs a 3D grain, got " + g.shape->describe());
-  const double gc = g.strength.value;
+  const double gc = g.strength.get_or(kGc, 0);
   require(gc > 0 && std::isfinite(gc),
           "grain " + std::to_string(g.id) + " has no critical energy release rate (assign_strength not called?)");
 
@@ -348,8 +356,8 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
 
   const double d_e = g.shape->equivalent_diameter();
   const Lattice L = grain_lattice(*g.shape, o_, d_e, frame);
-  a.points = static_cast<long>(L.size());
-  a.bonds = L.bonds();
+  points = static_cast<long>(L.size());
+  bonds = L.bonds();
   if (static_cast<long>(L.size()) < o_.min_points) return finish("too_few_points");
 
   // Contact zones; the zone of the largest force is fixed, the others carry their force.
@@ -372,7 +380,7 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
   // Linear ramp: the largest force grows at the size-dependent rate (§5).
   const double fmax = a.load;
   const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
-  a.steps = r.steps;
+  steps = r.steps;
   if (r.split) {
     PointClusters pc = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
     // A piece above the child size at the split may crumble into fines (< 3 %) during the
@@ -380,7 +388,7 @@ Analysis PeridynamicsModel::analyse(const Grain& g, const Material& m, std::span
     if (pc.clusters < 2 && !r.alive_at_split.empty())
       pc = pd::point_clusters(L, r.alive_at_split, o_.min_child_fraction);
     pc.frame = frame;  // lattice frame → body frame
-    a.criterion = r.lambda * fmax;
+    force_at_split = r.lambda * fmax;
     if (pc.clusters < 2) return finish("split_into_fines");
     a.broken = true;
     a.fracture = std::move(pc);

@@ -119,18 +119,26 @@ class PeridynamicsModel final : public BreakageModel {
  public:
   explicit PeridynamicsModel(PdOptions o);
   std::string name() const override { return "peridynamics"; }
+  // Per-grain strength values (Grain::strength).
+  static constexpr const char* kGc = "gc_J_m2";                 // G_c, eqs. 13, 15
+  static constexpr const char* kThreshold = "threshold_force_N";  // screening force, eqs. 12, 14
   void assign_strength(Grain& g, const Material& m, Rng& rng) const override;
   void inherit_strength(const Grain& parent, Grain& child, const Material& m, Rng& rng) const override;
-  // Outcomes (Analysis::outcome): split (broken), intact, no_load (fewer than two
+  // Outcomes (BreakageAnalysis::outcome): split (broken), intact, no_load (fewer than two
   // contacts carrying force), too_few_points (lattice below min_points),
   // contact_off_grain (a contact point farther than contact_tolerance_factor spacings from
   // every lattice point), step_limit (max_steps reached). Only split is broken; the others
-  // keep the grain as it is. criterion = largest contact force reached at the split (N),
-  // 0 otherwise; load = largest contact force given; points, bonds (directed CSR
-  // entries: each bond counted at both ends) and steps (explicit steps; 0 when the static
-  // preload shows no bond can break) describe the cost. The fracture is a PointClusters in
-  // the body frame (reference positions).
-  Analysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
+  // keep the grain as it is. Figures: force_at_split_N = largest contact force reached at
+  // the split (N), 0 otherwise; points, bonds (directed CSR entries: each bond counted at
+  // both ends) and steps (explicit steps; 0 when the static preload shows no bond can
+  // break) describe the cost. load = largest contact force given. The fracture is a
+  // PointClusters in the body frame (reference positions).
+  BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
+  std::vector<std::string> figure_names() const override { return {"points", "bonds", "steps", "force_at_split_N"}; }
+  // Zhu & Zhao 2019, §5: their screening, and a check every 0.08 MPa of platen stress.
+  ScreeningSettings default_screening() const override { return zhu_zhao_screening(); }
+  ScheduleSettings default_schedule() const override { return {0.08e6, 0}; }
+  double threshold_force(const Grain& g) const override { return g.strength.get_or(kThreshold, 0); }
   const PdOptions& options() const { return o_; }
 
  private:

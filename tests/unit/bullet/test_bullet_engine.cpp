@@ -11,7 +11,7 @@
 #include <random>
 
 #include "backends/bullet/BulletEngine.h"
-#include "backends/bullet/PrincipalAxes.h"
+#include "geometry/SymmetricEigen.h"
 #include "core/Config.h"
 #include "scenarios/Registry.h"
 
@@ -359,7 +359,7 @@ TEST(BulletEngine, NonDiagonalInertiaUsesThePrincipalFrame) {
   const auto tilted = Shape::polyhedron(m);
   const Mat3& I = tilted->mass_properties().inertia;
   EXPECT_GT(std::abs(I(0, 1)), 1e-2 * I.trace());
-  const auto pa = bullet_detail::principal_axes(I);
+  const auto pa = principal_axes(I);
   for (int k = 0; k < 3; ++k) {
     const Vec3 axis{pa.axes(0, k), pa.axes(1, k), pa.axes(2, k)};
     EXPECT_NEAR(norm(I * axis - axis * pa.moments[k]), 0, 1e-12 * I.trace());
@@ -497,25 +497,3 @@ TEST(BulletEngine, RollingFrictionIsALeverArmInTheInternalUnit) {
   EXPECT_NEAR(s.velocity.x, 0.0, 1e-4);
 }
 
-TEST(BulletPrincipalAxes, JacobiAndQuaternionRoundTrip) {
-  std::mt19937_64 rng(9);
-  std::normal_distribution<double> n;
-  for (int t = 0; t < 200; ++t) {
-    const Quat q = Quat{n(rng), n(rng), n(rng), n(rng)}.normalized();
-    const Quat p = bullet_detail::quat_from_rotation(q.matrix());
-    EXPECT_NEAR(std::abs(p.w * q.w + p.x * q.x + p.y * q.y + p.z * q.z), 1.0, 1e-14);  // all four branches
-    // R diag(m) Rᵀ has principal moments m and axes R (up to order and sign).
-    const Vec3 m{1 + std::abs(n(rng)), 2 + std::abs(n(rng)), 0.1 + std::abs(n(rng))};
-    const Mat3 R = q.matrix();
-    const Mat3 A = R * Mat3::diagonal(m) * R.transposed();
-    const auto pa = bullet_detail::principal_axes(A);
-    const Mat3 back = pa.axes * Mat3::diagonal(pa.moments) * pa.axes.transposed();
-    for (int i = 0; i < 9; ++i) EXPECT_NEAR(back.m[i], A.m[i], 1e-12 * A.trace());
-    const Mat3 axes_q = pa.rotation.matrix();
-    for (int i = 0; i < 9; ++i) EXPECT_NEAR(axes_q.m[i], pa.axes.m[i], 1e-12);
-    EXPECT_NEAR(pa.moments.x + pa.moments.y + pa.moments.z, m.x + m.y + m.z, 1e-12 * A.trace());
-  }
-  Mat3 bad = Mat3::identity();
-  bad(0, 1) = 1;
-  EXPECT_THROW(bullet_detail::principal_axes(bad), std::invalid_argument);
-}

@@ -51,7 +51,7 @@ BreakageEvent event(double stress, std::size_t children, double removed) {
 
 TEST(EventsWriter, BreakagePerMpaCountsEventsWhoseChildrenAllBecameFines) {
   Fixture f("per_mpa");
-  EventsWriter w(f.dir.string());
+  EventsWriter w(f.dir.string(), {});
   RunState s;
   s.platen_stress = 2.5e6;
   // Two splits with children, one whose pieces were all removed as fines, one analysis

@@ -54,14 +54,14 @@ class SqueezeEngine : public Engine {
 class ThresholdModel : public BreakageModel {
  public:
   std::string name() const override { return "threshold"; }
-  void assign_strength(Grain& g, const Material&, Rng& rng) const override { g.strength.value = 50 + 50 * rng.uniform(); }
+  void assign_strength(Grain& g, const Material&, Rng& rng) const override { g.strength.set("limit_N", 50 + 50 * rng.uniform()); }
   void inherit_strength(const Grain& p, Grain& c, const Material&, Rng&) const override {
-    c.strength.value = 1000 * p.strength.value;  // children never break here
+    c.strength.set("limit_N", 1000 * p.strength.get("limit_N"));  // children never break here
   }
-  Analysis analyse(const Grain& g, const Material&, std::span<const Contact> cs) const override {
-    Analysis a;
+  BreakageAnalysis analyse(const Grain& g, const Material&, std::span<const Contact> cs) const override {
+    BreakageAnalysis a;
     for (const auto& c : cs) a.load = std::max(a.load, norm(c.force));
-    a.broken = a.load > g.strength.value;
+    a.broken = a.load > g.strength.get("limit_N");
     a.outcome = a.broken ? "split" : "intact";
     if (a.broken) a.fracture = CuttingSurfaces{{CutPlane{{1, 0, 0}, 0}}};
     return a;
@@ -188,6 +188,6 @@ TEST(SimulationLoop, ResultsDoNotDependOnThreads) {
   for (std::size_t i = 0; i < a.grains.size(); ++i) {
     EXPECT_EQ(a.grains[i].id, b.grains[i].id);
     EXPECT_EQ(a.grains[i].position, b.grains[i].position);
-    EXPECT_EQ(a.grains[i].strength.value, b.grains[i].strength.value);
+    EXPECT_EQ(a.grains[i].strength.values, b.grains[i].strength.values);
   }
 }

@@ -1,10 +1,10 @@
-#include "backends/bullet/PrincipalAxes.h"
+#include "geometry/SymmetricEigen.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-namespace crumble::bullet_detail {
+namespace crumble {
 
 PrincipalAxes principal_axes(const Mat3& m) {
   double scale = 0;
@@ -59,6 +59,21 @@ PrincipalAxes principal_axes(const Mat3& m) {
   return r;
 }
 
+PrincipalAxes2 principal_axes_2d(double xx, double xy, double yy) {
+  if (!std::isfinite(xx) || !std::isfinite(xy) || !std::isfinite(yy))
+    throw std::invalid_argument("principal_axes_2d: tensor has a non-finite entry");
+  PrincipalAxes2 r;
+  const double mean = 0.5 * (xx + yy), half = 0.5 * (xx - yy);
+  const double radius = std::hypot(half, xy);  // Mohr's circle
+  r.values[0] = mean - radius;
+  r.values[1] = mean + radius;
+  // Direction of the larger value at angle θ, tan 2θ = 2 xy / (xx − yy).
+  const double theta = 0.5 * std::atan2(xy, half);
+  r.vectors[1] = {std::cos(theta), std::sin(theta), 0};
+  r.vectors[0] = {-std::sin(theta), std::cos(theta), 0};
+  return r;
+}
+
 Quat quat_from_rotation(const Mat3& r) {
   const double tr = r.trace();
   Quat q;
@@ -78,4 +93,4 @@ Quat quat_from_rotation(const Mat3& r) {
   return q.normalized();
 }
 
-}  // namespace crumble::bullet_detail
+}  // namespace crumble

@@ -1,0 +1,335 @@
+// Breakage model "stress" (Harmon et al. 2020, §3.1, §3.3): criteria on known stress
+// states, the average stress against closed forms, the fracture plane and its fallbacks,
+// Weibull strengths and their size effect, and the option errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "breakage/stress/StressModel.h"
+#include "core/Config.h"
+
+using namespace crumble;
+using Json = nlohmann::json;
+
+namespace {
+
+
+double equivalent(const std::string& criterion, const stress::Principal& p) {
+  return stress::find_criterion(criterion)->make()->equivalent_stress(p);
+}
+
+StrengthState strengths(double s, double t = 0) {
+  StrengthState st;
+  st.set(stress::kStrength, s);
+  if (t > 0) st.set(stress::kTensileStrength, t);
+  return st;
+}
+
+Contact wall_contact(int wall, Vec3 p, Vec3 f) {
+  Contact c;
+  c.a = 0;
+  c.wall = wall;
+  c.point = p;
+  c.force = f;
+  c.normal = normalized(f);
+  return c;
+}
+
+std::unique_ptr<StressModel> model(const Json& breakage, int dim) {
+  Json doc = breakage;
+  Config cfg(doc);
+  EngineContext ctx;
+  ctx.dimension = dim;
+  auto m = make_stress(cfg, ctx);
+  return std::unique_ptr<StressModel>(static_cast<StressModel*>(m.release()));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- criteria (eqs. 7–10)
+
+TEST(StressCriteria, UniaxialHydrostaticAndPureShear) {
+  const double S = 10e6;
+  // Uniaxial compression S (tension positive: principal values 0, 0, −S).
+  const stress::Principal uni{0, 0, -S};
+  EXPECT_NEAR(equivalent("von_mises", uni), S, 1e-6);
+  EXPECT_NEAR(equivalent("tresca", uni), S, 1e-6);
+  EXPECT_NEAR(equivalent("max_principal", uni), S, 1e-6);
+  // Hydrostatic compression p: no deviatoric stress.
+  const stress::Principal hyd{-S, -S, -S};
+  EXPECT_NEAR(equivalent("von_mises", hyd), 0, 1e-6);
+  EXPECT_NEAR(equivalent("tresca", hyd), 0, 1e-6);
+  EXPECT_NEAR(equivalent("max_principal", hyd), S, 1e-6);
+  // Pure shear τ: principal values τ, 0, −τ; σ_V = √3 τ, Tresca 2τ.
+  const double tau = 4e6;
+  const stress::Principal shear{tau, 0, -tau};
+  EXPECT_NEAR(equivalent("von_mises", shear), std::sqrt(3.0) * tau, 1e-6);
+  EXPECT_NEAR(equivalent("tresca", shear), 2 * tau, 1e-6);
+  EXPECT_NEAR(equivalent("max_principal", shear), tau, 1e-6);
+  // Uniaxial tension: the compressive measure is 0.
+  EXPECT_EQ(equivalent("max_principal", {S, 0, 0}), 0.0);
+}
+
+TEST(StressCriteria, FailureAgainstTheStrengths) {
+  auto vm = stress::find_criterion("von_mises")->make();
+  EXPECT_TRUE(vm->fails({0, 0, -35e6}, strengths(35e6)));
+  EXPECT_FALSE(vm->fails({0, 0, -34.9e6}, strengths(35e6)));
+  auto tr = stress::find_criterion("tresca")->make();
+  // eq. 10: τ ≥ ½σ^max, i.e. a pure shear of 20 MPa breaks a 40 MPa grain.
+  EXPECT_TRUE(tr->fails({20e6, 0, -20e6}, strengths(40e6)));
+  EXPECT_FALSE(tr->fails({19.9e6, 0, -19.9e6}, strengths(40e6)));
+  auto mp = stress::find_criterion("max_principal")->make();
+  // eqs. 7–8: 40 MPa in compression, 0.4 MPa in tension.
+  EXPECT_TRUE(mp->fails({0, 0, -40e6}, strengths(40e6, 0.4e6)));
+  EXPECT_FALSE(mp->fails({0, 0, -39e6}, strengths(40e6, 0.4e6)));
+  EXPECT_TRUE(mp->fails({0.4e6, 0, -1e6}, strengths(40e6, 0.4e6)));
+  EXPECT_FALSE(mp->fails({0.39e6, 0, -1e6}, strengths(40e6, 0.4e6)));
+}
+
+TEST(StressCriteria, TableHasThePapersCriteriaAndStrengths) {
+  EXPECT_EQ(stress::criterion_names(), (std::vector<std::string>{"max_principal", "von_mises", "tresca"}));
+  // Harmon et al. 2020, Table 2.
+  EXPECT_EQ(stress::find_criterion("max_principal")->default_strength, 40e6);
+  EXPECT_EQ(stress::find_criterion("max_principal")->default_tensile_strength, 0.4e6);
+  EXPECT_EQ(stress::find_criterion("von_mises")->default_strength, 35e6);
+  EXPECT_EQ(stress::find_criterion("tresca")->default_strength, 40e6);
+  EXPECT_EQ(stress::find_criterion("nope"), nullptr);
+}
+
+// ---------------------------------------------------------------- average stress (eq. 5)
+
+TEST(AverageStress, SphereBetweenTwoEqualAndOppositeForces) {
+  // Closed form: σ = (1/V) Σ x ⊗ F = −2PR/V along the load axis, 0 elsewhere;
+  // V = 4/3 πR³ → σ_axis = −3P/(2πR²).
+  const double R = 1e-3, P = 100, V = 4.0 / 3.0 * kPi * R * R * R;
+  const Vec3 c{0.01, 0.02, 0.03};
+  for (const Vec3 axis : {Vec3{0, 0, 1}, normalized(Vec3{1, 1, 1}), normalized(Vec3{0.3, -2, 0.7})}) {
+    std::vector<Contact> cs{wall_contact(1, c + axis * R, axis * -P), wall_contact(0, c - axis * R, axis * P)};
+    const Mat3 s = average_stress(c, V, cs);
+    const auto p = principal_stresses(s, 3);
+    const double expect = -3 * P / (2 * kPi * R * R);
+    EXPECT_NEAR(p[2], expect, 1e-9 * std::abs(expect));
+    EXPECT_NEAR(p[0], 0, 1e-9 * std::abs(expect));
+    EXPECT_NEAR(p[1], 0, 1e-9 * std::abs(expect));
+    // von Mises of that uniaxial state is its magnitude.
+    EXPECT_NEAR(equivalent("von_mises", p), -expect, 1e-9 * std::abs(expect));
+  }
+}
+
+TEST(AverageStress, DiskBetweenTwoEqualAndOppositeForces) {
+  // 2D: V = πR² (forces per unit thickness), σ_axis = −2PR/(πR²) = −2P/(πR); plane stress.
+  const double R = 1e-3, P = 50;
+  const Vec3 axis = normalized(Vec3{1, 2, 0});
+  std::vector<Contact> cs{wall_contact(1, axis * R, axis * -P), wall_contact(0, axis * -R, axis * P)};
+  const auto p = principal_stresses(average_stress({}, kPi * R * R, cs), 2);
+  const double expect = -2 * P / (kPi * R);
+  EXPECT_NEAR(p[2], expect, 1e-9 * std::abs(expect));
+  EXPECT_NEAR(p[0], 0, 1e-9 * std::abs(expect));
+  EXPECT_NEAR(p[1], 0, 1e-9 * std::abs(expect));
+}
+
+TEST(AverageStress, IsSymmetrised) {
+  // A single tangential force: x ⊗ F is not symmetric; σ̄ is its symmetric part.
+  std::vector<Contact> cs{wall_contact(0, {1, 0, 0}, {0, 2, 0})};
+  const Mat3 s = average_stress({}, 1.0, cs);
+  EXPECT_DOUBLE_EQ(s(0, 1), 1.0);
+  EXPECT_DOUBLE_EQ(s(1, 0), 1.0);
+}
+
+// ---------------------------------------------------------------- fracture plane (§3.3)
+
+TEST(FracturePlane, ThroughThreePoints) {
+  const double R = 1e-3;
+  const auto pl = fracture_plane({{R, 0, 0}, {0, R, 0}, {0, 0, R}}, {-1, 0, 0}, 3, 2 * R);
+  ASSERT_TRUE(pl);
+  const Vec3 n = pl->normal * (pl->normal.x > 0 ? 1.0 : -1.0);
+  EXPECT_NEAR(n.x, 1 / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(n.y, 1 / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(n.z, 1 / std::sqrt(3.0), 1e-12);
+  for (const Vec3 p : {Vec3{R, 0, 0}, Vec3{0, R, 0}, Vec3{0, 0, R}}) EXPECT_NEAR(pl->signed_distance(p), 0, 1e-15);
+}
+
+TEST(FracturePlane, TwoPointsAndTheCentroid) {
+  const double R = 1e-3;
+  const auto pl = fracture_plane({{R, 0, 0}, {0, R, 0}}, {-1, 0, 0}, 3, 2 * R);
+  ASSERT_TRUE(pl);
+  EXPECT_NEAR(std::abs(pl->normal.z), 1, 1e-12);
+  EXPECT_NEAR(pl->offset, 0, 1e-15);
+  // 2D: one contact and the centroid make the line.
+  const auto line = fracture_plane({{R, R, 0}}, {-1, 0, 0}, 2, 2 * R);
+  ASSERT_TRUE(line);
+  EXPECT_NEAR(line->signed_distance({0, 0, 0}), 0, 1e-15);
+  EXPECT_NEAR(line->signed_distance({R, R, 0}), 0, 1e-15);
+  EXPECT_NEAR(line->normal.z, 0, 1e-15);
+}
+
+TEST(FracturePlane, CollinearAndCoincidentFallbacks) {
+  const double R = 1e-3;
+  // Diametral load: top, bottom and centroid collinear, force along the line → a meridian
+  // plane containing the load axis.
+  auto pl = fracture_plane({{0, 0, R}, {0, 0, -R}}, {0, 0, -100}, 3, 2 * R);
+  ASSERT_TRUE(pl);
+  EXPECT_NEAR(pl->normal.z, 0, 1e-15);
+  EXPECT_NEAR(norm(pl->normal), 1, 1e-15);
+  EXPECT_NEAR(pl->signed_distance({0, 0, 0.5 * R}), 0, 1e-15);
+  // Collinear points, oblique force: the plane holds the line and the force direction.
+  pl = fracture_plane({{0, 0, R}, {0, 0, -R}}, {1, 0, -1}, 3, 2 * R);
+  ASSERT_TRUE(pl);
+  EXPECT_NEAR(std::abs(pl->normal.y), 1, 1e-12);
+  // Coincident points: the line along the force through the point.
+  pl = fracture_plane({{R, 0, 0}, {R, 0, 0}, {R, 0, 0}}, {-1, 0, 0}, 3, 2 * R);
+  ASSERT_TRUE(pl);
+  EXPECT_NEAR(pl->normal.x, 0, 1e-15);
+  EXPECT_NEAR(pl->signed_distance({R, 0, 0}), 0, 1e-15);
+  // 2D coincident: the line through the point along the force.
+  pl = fracture_plane({{R, 0, 0}, {R, 0, 0}}, {-3, 1, 0}, 2, 2 * R);
+  ASSERT_TRUE(pl);
+  EXPECT_NEAR(dot(pl->normal, normalized(Vec3{-3, 1, 0})), 0, 1e-12);
+  // Nothing fixes a direction: no plane.
+  EXPECT_FALSE(fracture_plane({{0, 0, 0}, {0, 0, 0}}, {0, 0, 0}, 3, 2 * R));
+  EXPECT_FALSE(fracture_plane({{0, 0, 0}}, {0, 0, 0}, 2, 2 * R));
+}
+
+TEST(FracturePlane, NeverNaN) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::uniform_int_distribution<int> pick(0, 3);
+  for (int t = 0; t < 2000; ++t) {
+    std::vector<Vec3> pts;
+    const int n = 1 + pick(rng) % 3;
+    const Vec3 base{u(rng), u(rng), u(rng)};
+    for (int i = 0; i < n; ++i) {
+      // Mix of general, tiny-offset (nearly coincident) and collinear points.
+      const int kind = pick(rng);
+      Vec3 p = kind == 0 ? base : kind == 1 ? base + Vec3{1e-15, 0, 0} : kind == 2 ? base * -2.0 : Vec3{u(rng), u(rng), u(rng)};
+      pts.push_back(p);
+    }
+    const Vec3 f = pick(rng) == 0 ? Vec3{} : Vec3{u(rng), u(rng), u(rng)};
+    for (int dim : {2, 3}) {
+      std::vector<Vec3> q = pts;
+      if (dim == 2)
+        for (auto& p : q) p.z = 0;
+      if (dim == 3 && q.size() < 2) q.push_back(base * 0.5);
+      const auto pl = fracture_plane(q, dim == 2 ? Vec3{f.x, f.y, 0} : f, dim, 2e-3);
+      if (!pl) continue;
+      EXPECT_TRUE(is_finite(pl->normal) && std::isfinite(pl->offset));
+      EXPECT_NEAR(norm(pl->normal), 1, 1e-12);
+      EXPECT_NEAR(pl->signed_distance(q.front()), 0, 1e-12);
+    }
+  }
+}
+
+// ---------------------------------------------------------------- strengths (eqs. 12–13)
+
+TEST(StressStrength, WeibullSamplesFollowEq11) {
+  // The median of eq. 11 at d0: σ0 (ln 2)^(1/m).
+  auto m = model({{"criterion", "von_mises"}}, 3);
+  Rng rng(11);
+  std::vector<double> s;
+  for (int i = 0; i < 4000; ++i) {
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    Rng r = rng.derive(static_cast<std::uint64_t>(i));
+    m->assign_strength(g, Material{}, r);
+    s.push_back(g.strength.get(stress::kStrength));
+  }
+  std::nth_element(s.begin(), s.begin() + 2000, s.end());
+  EXPECT_NEAR(s[2000], 35e6 * std::cbrt(std::log(2.0)), 0.03 * 35e6);
+}
+
+TEST(StressStrength, ChildrenStrongerByEq13) {
+  auto m = model({{"criterion", "max_principal"}, {"weibull", false}}, 3);
+  Grain parent, child;
+  parent.shape = Shape::sphere(1e-3);  // d = d0: σ0 exactly
+  child.shape = Shape::sphere(0.5e-3);
+  Rng rng(1);
+  m->assign_strength(parent, Material{}, rng);
+  EXPECT_DOUBLE_EQ(parent.strength.get(stress::kStrength), 40e6);
+  EXPECT_DOUBLE_EQ(parent.strength.get(stress::kTensileStrength), 0.4e6);
+  m->inherit_strength(parent, child, Material{}, rng);
+  // (d_a/d_b)^(−3/m) with d_a/d_b = 1/2, m = 3: twice as strong.
+  EXPECT_NEAR(child.strength.get(stress::kStrength), 80e6, 1e-6);
+  EXPECT_NEAR(child.strength.get(stress::kTensileStrength), 0.8e6, 1e-9);
+}
+
+// ---------------------------------------------------------------- the model
+
+TEST(StressModel, SplitsASphereThroughItsLoadAxis) {
+  auto m = model({{"criterion", "von_mises"}, {"weibull", false}}, 3);
+  Grain g;
+  g.id = 7;
+  g.shape = Shape::sphere(1e-3);
+  g.position = {0.01, 0.01, 0.01};
+  g.orientation = Quat::from_axis_angle({1, 0, 0}, 0.3);
+  Rng rng(1);
+  m->assign_strength(g, Material{}, rng);
+  const double R = 1e-3;
+  const double P_fail = 35e6 * 2 * kPi * R * R / 3;  // σ_V = 3P/(2πR²) = 35 MPa
+  auto load = [&](double P) {
+    return std::vector<Contact>{wall_contact(1, g.position + Vec3{0, 0, R}, {0, 0, -P}),
+                                wall_contact(0, g.position - Vec3{0, 0, R}, {0, 0, P})};
+  };
+  const auto low = m->analyse(g, Material{}, load(0.99 * P_fail));
+  EXPECT_FALSE(low.broken);
+  EXPECT_EQ(low.outcome, "intact");
+  EXPECT_NEAR(low.figure("equivalent_stress_Pa"), 0.99 * 35e6, 1e-6 * 35e6);
+  const auto hit = m->analyse(g, Material{}, load(1.01 * P_fail));
+  ASSERT_TRUE(hit.broken);
+  EXPECT_EQ(hit.outcome, "split");
+  EXPECT_NEAR(hit.load, 1.01 * P_fail, 1e-9);
+  EXPECT_NEAR(hit.figure("sigma_3_Pa"), -1.01 * 35e6, 1e-6 * 35e6);
+  EXPECT_NEAR(hit.figure("strength_Pa"), 35e6, 1e-6 * 35e6);
+  ASSERT_TRUE(hit.fracture && std::holds_alternative<CuttingSurfaces>(*hit.fracture));
+  const auto& planes = std::get<CuttingSurfaces>(*hit.fracture).planes;
+  ASSERT_EQ(planes.size(), 1u);
+  // The plane holds the load axis (world z) through the centroid: in the body frame.
+  const Vec3 axis_body = g.orientation.conjugate().rotate({0, 0, 1});
+  EXPECT_NEAR(dot(planes[0].normal, axis_body), 0, 1e-9);
+  EXPECT_NEAR(planes[0].offset, 0, 1e-12);
+  EXPECT_EQ(m->figure_names(), (std::vector<std::string>{"sigma_1_Pa", "sigma_2_Pa", "sigma_3_Pa",
+                                                          "equivalent_stress_Pa", "strength_Pa"}));
+}
+
+TEST(StressModel, SingleContactIn3DIsHeldOff) {
+  auto m = model({{"criterion", "von_mises"}, {"weibull", false}}, 3);
+  Grain g;
+  g.shape = Shape::sphere(1e-3);
+  Rng rng(1);
+  m->assign_strength(g, Material{}, rng);
+  // Two contacts with the same partner (wall 1): one point, breakage held off.
+  std::vector<Contact> cs{wall_contact(1, {0, 0, 1e-3}, {0, 0, -1e4}), wall_contact(1, {1e-4, 0, 1e-3}, {0, 0, -1e3})};
+  const auto a = m->analyse(g, Material{}, cs);
+  EXPECT_FALSE(a.broken);
+  EXPECT_EQ(a.outcome, "single_contact");
+  EXPECT_EQ(m->analyse(g, Material{}, {}).outcome, "no_load");
+}
+
+TEST(StressModel, DefaultsOfScreeningAndSchedule) {
+  auto m3 = model(Json::object(), 3);
+  auto m2 = model(Json::object(), 2);
+  EXPECT_EQ(m3->options().criterion, "von_mises");
+  EXPECT_EQ(m3->default_screening().min_contacts, 2);
+  EXPECT_EQ(m2->default_screening().min_contacts, 1);
+  EXPECT_EQ(m3->default_screening().min_diameter, 0);
+  EXPECT_FALSE(m3->default_screening().force_threshold);
+  EXPECT_EQ(m3->default_screening().max_unbalanced_force_ratio, 0);
+  EXPECT_EQ(m3->default_schedule().every_steps, 100);
+  EXPECT_EQ(m3->default_schedule().every_stress, 0);
+  EXPECT_EQ(m2->figure_names().size(), 4u);  // σ1, σ2, equivalent, strength
+}
+
+TEST(StressModel, UnknownCriterionAndMisplacedTensileStrength) {
+  try {
+    model({{"criterion", "mohr_coulomb"}}, 3);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("criterion"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("max_principal, von_mises, tresca"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(model({{"criterion", "tresca"}, {"tensile_strength", 1e6}}, 3), ConfigError);
+  EXPECT_THROW(model({{"criterion", "von_mises"}, {"strength", -1}}, 3), ConfigError);
+  EXPECT_NO_THROW(model({{"criterion", "max_principal"}, {"tensile_strength", 1e6}}, 3));
+}
