@@ -122,6 +122,21 @@ PackingSpec jaw_crusher_scene(const Config& sc, int dim, Rng& rng) {
   swing.motion.phase = sc.number("phase", 0.0);
   spec.walls.push_back(swing);
 
+  // A hopper above the plates (fixed, vertical) keeps fragments that the squeeze throws up
+  // inside the crusher instead of letting them fall past its outside.
+  const double hopper = sc.number("hopper_height", 1.5, 0.0);
+  if (hopper > 0) {
+    MovingWall left;
+    left.name = "hopper_left";
+    left.shape = rectangle(hopper, thick, plate_spacing);
+    left.position = {-0.5 * thick, H + 0.5 * hopper, 0};
+    spec.walls.push_back(left);
+    MovingWall right = left;
+    right.name = "hopper_right";
+    right.position = {Tx + 0.01 + 0.5 * thick, H + 0.5 * hopper, 0};
+    spec.walls.push_back(right);
+  }
+
   // Rocks: outlines in order (Harmon et al. 2020 §4.1: 25 outlines repeated cyclically),
   // each scaled to an equivalent diameter drawn uniformly in rocks.diameter and turned by
   // a random angle (the seed decides), rebuilt at the scene's level-set resolution (Table 1:
@@ -175,7 +190,7 @@ PackingSpec jaw_crusher_scene(const Config& sc, int dim, Rng& rng) {
   const double depth = sc.positive("discharge_depth", 0.2);
   spec.container.open = true;
   spec.container.domain.lo = {-thick - 1.0, -depth, -1};
-  spec.container.domain.hi = {Tx + thick + 1.0, feed.spawn.y + rmax + 1.0, 1};
+  spec.container.domain.hi = {Tx + thick + 1.0, std::max(feed.spawn.y, H + hopper) + rmax + 3.0, 1};
   spec.container.height = spec.container.domain.hi.y - spec.container.domain.lo.y;
   spec.duration = cycles * 60.0 / rpm;
   spec.scene_figures = {{"jaw_plate_length_m", L},  {"jaw_plate_height_m", H},   {"jaw_css_m", css},

@@ -107,8 +107,10 @@ TEST(JawScene, GeometryFollowsTable1) {
                   {"cycles", 1},
                   {"rocks", {{"count", 1}, {"shapes", Json::array({{{"type", "disk"}}})}}}}}};
     Scenario sc = build_scenario(doc, {});
-    ASSERT_EQ(sc.packing.walls.size(), 2u);
+    ASSERT_EQ(sc.packing.walls.size(), 4u);  // fixed jaw, swing jaw, two hopper walls
     const MovingWall& sw = sc.packing.walls[1];
+    ASSERT_EQ(sw.name, "swing_jaw");
+    EXPECT_EQ(sc.packing.walls[0].motion.type, WallMotion::Type::Fixed);
     EXPECT_NEAR(sw.motion.amplitude() * 180 / kPi, 1.7, 1e-12);
     // Bottom inner corner of the swing plate (body frame −t/2, −L/2), fixed face at x = 0.
     const Aabb b = sw.shape->bounds();
