@@ -50,6 +50,7 @@ struct GuardContext {
   std::string engine;         // name, for the advice
   double energy_budget = 0;   // J (2D: J/m): energy that can have entered the system
   double reference_diameter = 0;  // m: mean equivalent diameter of the initial grains
+  bool open = false;          // an open scene: no platen or void ratio; containment in the domain
 };
 
 // O(1) checks on the state the loop already has: finite values, platen above the floor,

@@ -162,6 +162,7 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   at.time = time_;
   at.dt = dt;
   at.engine = engine_->name();
+  at.open = container_.open;
   const RunState st = state();
   at.platen_stress = st.platen_stress;
   check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
@@ -193,12 +194,12 @@ RunState Simulation::state() const {
   s.dt = dt_;
   s.platen_force = engine_->platen_force();
   s.floor_force = engine_->floor_force();
-  s.platen_stress = s.platen_force / area();
+  s.platen_stress = area() > 0 ? s.platen_force / area() : 0;  // open scenes have no platen
   s.target_stress = loading_.target_stress(time_);
   s.platen_height = engine_->platen_position();
   s.axial_strain = initial_height_ > 0 ? (initial_height_ - s.platen_height) / initial_height_ : 0;
   const double vs = solid_volume();
-  s.void_ratio = vs > 0 ? (area() * s.platen_height - vs) / vs : 0;
+  s.void_ratio = vs > 0 && !container_.open ? (area() * s.platen_height - vs) / vs : 0;
   s.grains = grains_.size();
   s.breakage_events = events_;
   s.analyses = analyses_;
@@ -236,6 +237,7 @@ RunSummary Simulation::run(const Progress& progress) {
                                   std::to_string(bound) + " s (set simulation.auto_reduce_dt or a smaller dt)");
   }
   auto last_progress = Clock::now();
+  update_open_scene();
   while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
     if (settings_.max_steps > 0 && step_ >= settings_.max_steps) break;
     if (settings_.stop_after_breakage_events > 0 && events_ >= settings_.stop_after_breakage_events) break;
@@ -258,6 +260,7 @@ RunSummary Simulation::run(const Progress& progress) {
     engine_->set_platen(loading_.command(time_, area(), initial_height_));
     auto t0 = Clock::now();
     const double z_before = st.platen_height;
+    drive_walls(time_, dt);
     engine_->step(dt);
     timings_.engine += seconds_since(t0);
     time_ += dt;
@@ -266,10 +269,12 @@ RunSummary Simulation::run(const Progress& progress) {
     account_platen_work(st.platen_force, st.platen_height - z_before);
     if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
       t0 = Clock::now();
+      update_open_scene();
       check_guards("loading", dt, true);
       timings_.guards += seconds_since(t0);
     } else {
       GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->name(), 0};
+      at.open = container_.open;
       check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
     }
     sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
@@ -301,6 +306,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.analyses = analyses_;
   sum.fragment_fallbacks = fallbacks_;
   sum.dt_reductions = dt_reductions_;
+  finish_open_scene(sum);
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);

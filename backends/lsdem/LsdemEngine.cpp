@@ -285,6 +285,26 @@ void LsdemEngine::set_shape_wall_motion(int wall, const Vec3& v, const Vec3& w) 
   }
 }
 
+int LsdemEngine::add_moving_wall(const MovingWall& w) {
+  return add_shape_wall(w.shape, w.position, w.orientation);
+}
+
+void LsdemEngine::set_moving_wall(int wall, const WallKinematics& k) {
+  if (wall < 0 || wall >= static_cast<int>(walls_kin_.size()))
+    throw std::invalid_argument("lsdem: no moving wall " + std::to_string(wall));
+  if (!is_finite(k.position)) throw std::invalid_argument("lsdem: moving wall position is not finite");
+  set_shape_wall_motion(wall, k.velocity, k.angular_velocity);
+  Body& b = walls_kin_[wall];
+  b.x = k.position;
+  b.q = k.orientation.normalized();
+  if (ctx_.dimension == 2) {
+    b.x.z = 0;
+    const double n = std::hypot(b.q.w, b.q.z);
+    b.q = Quat{b.q.w / n, 0, 0, b.q.z / n};
+  }
+  b.R = b.q.matrix();
+}
+
 Vec3 LsdemEngine::shape_wall_position(int wall) const { return walls_kin_.at(wall).x; }
 Quat LsdemEngine::shape_wall_orientation(int wall) const { return walls_kin_.at(wall).q; }
 Vec3 LsdemEngine::shape_wall_force(int wall) const { return shape_wall_force_.at(wall); }
@@ -335,7 +355,7 @@ double LsdemEngine::max_stable_dt() const {
 }
 
 std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
-  if (!has_container_) return {};
+  if (!has_container_ || container_.open) return {};  // open scenes: moving walls only
   return container_planes(container_, ctx_.dimension, platen_.position(), platen_.velocity());
 }
 
@@ -785,7 +805,7 @@ void LsdemEngine::integrate(double dt) {
     b.turned = wn * dt;
   }
   // Platen along the vertical axis.
-  if (has_container_ && container_.height > 0) {
+  if (has_container_ && container_.height > 0 && !container_.open) {
     // Mass rule and semi-implicit update shared by every engine (core/Platen.h); the
     // global damping acts on the platen too.
     double M = 0;

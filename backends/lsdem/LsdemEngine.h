@@ -135,6 +135,11 @@ class LsdemEngine final : public Engine {
   Quat shape_wall_orientation(int wall) const;
   Vec3 shape_wall_force(int wall) const;
 
+  // The engine-neutral moving walls (core/MovingWall.h) are shape walls.
+  int add_moving_wall(const MovingWall& w) override;
+  void set_moving_wall(int index, const WallKinematics& k) override;
+  Vec3 moving_wall_force(int index) const override { return shape_wall_force(index); }
+
   const LsdemSettings& settings() const { return s_; }
   const LsdemStats& stats() const { return stats_; }
   void reset_stats() { stats_ = LsdemStats{}; }
