@@ -415,11 +415,13 @@ struct BulletEngine::Impl {
     } else {
       // Bullet inflates a hull by its margin: inset the hull by the same amount so the
       // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer
-      // to a face than twice the margin gets a smaller margin.
+      // to a face than twice the margin gets a smaller margin; a flat hull (its centroid on
+      // or, by rounding, outside a face) gets none and is taken as it is.
       const TriMesh& hull = shape->convex_hull();
-      double margin = opt.margin_fraction * d;
-      margin = std::min(margin, 0.5 * convex_inradius_about_centroid(hull));
-      const std::vector<Vec3> inset = inset_convex_vertices(hull, margin);
+      const double inradius = convex_inradius_about_centroid(hull);
+      double margin = 0;
+      if (inradius > 0 && std::isfinite(inradius)) margin = std::min(opt.margin_fraction * d, 0.5 * inradius);
+      const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(hull, margin) : hull.vertices;
       const Quat to_principal = e->principal.conjugate();
       std::vector<btScalar> pts;
       pts.reserve(3 * inset.size());
