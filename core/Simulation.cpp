@@ -383,9 +383,15 @@ void Simulation::check_breakage(const RunState& st) {
     AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
                        results[k]};
     rec.analysis.fracture.reset();
-    for (auto& o : observers_) o->on_analysis(*this, rec);
     // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
-    if (!results[k].broken || frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0) < 2) continue;
+    // The record says what the builder made of it: "no_split" when the model broke the
+    // grain but the builder returned fewer than two pieces (the grain stays as it is),
+    // "chip" when one child and removed fines came out.
+    const std::size_t pieces = frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0);
+    if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
+    else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
+    for (auto& o : observers_) o->on_analysis(*this, rec);
+    if (!results[k].broken || pieces < 2) continue;
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;
