@@ -56,7 +56,8 @@ const char* kExitStatus =
 // Files a run writes into --out (and their temporary names): the only files --force removes.
 bool is_run_output(const std::string& name) {
   static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv",
-                                              "ncl.csv", "psd.csv", "shape.csv", "grains.pvd", "effective_scenario.json",
+                                              "ncl.csv", "psd.csv", "shape.csv", "product_psd.csv", "product.csv",
+                                              "grains.pvd", "effective_scenario.json",
                                               "packing.json", "checkpoint.json"};
   for (const char* suffix : {"", ".part", ".tmp", ".part.tmp"}) {
     const std::string sfx = suffix;

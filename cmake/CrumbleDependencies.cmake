@@ -39,6 +39,11 @@ endif()
 if(CRUMBLE_WITH_ODE)
   pkg_check_modules(ODE QUIET IMPORTED_TARGET ode)
   crumble_require(ODE_FOUND libode-dev "ODE")
+  # Only the double-precision build may be used (dReal = double on both sides).
+  pkg_get_variable(ODE_PRECISION ode precision)
+  if(NOT ODE_PRECISION STREQUAL "dDOUBLE")
+    message(FATAL_ERROR "crumble: ode.pc says precision=${ODE_PRECISION}; the ode engine needs libode built with dDOUBLE")
+  endif()
 endif()
 
 if(CRUMBLE_WITH_CGAL)

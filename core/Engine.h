@@ -10,6 +10,7 @@
 #include "core/Contact.h"
 #include "core/Grain.h"
 #include "core/Loading.h"
+#include "core/MovingWall.h"
 
 namespace crumble {
 
@@ -20,6 +21,12 @@ struct Container {
   double lx = 0, ly = 0;
   double height = 0;
   double platen_mass = 0;  // kg, for force control; 0 = the grains' total (unscaled) mass
+  // An open scene (a jaw crusher): no floor, side walls or platen; the grains move among
+  // moving walls inside `domain`. A grain whose centroid falls below the domain's bottom
+  // has left through the discharge (product, see Simulation); one outside its other faces
+  // is a guard failure. `height` is then the domain's height (energy bookkeeping).
+  bool open = false;
+  Aabb domain;
 };
 
 // What the Simulation hands every engine at construction.
@@ -69,6 +76,14 @@ class Engine {
   virtual double platen_force() const = 0;
   // The same for the floor (positive when the grains push it down).
   virtual double floor_force() const = 0;
+
+  // Moving walls (core/MovingWall.h), indexed in the order added. The Simulation sets
+  // each wall's pose at the start of every step and its mean velocities over the step.
+  // The defaults refuse with a message naming the engine.
+  virtual int add_moving_wall(const MovingWall& w);
+  virtual void set_moving_wall(int index, const WallKinematics& k);
+  // Total force (N; 2D: N/m) the grains exert on the wall.
+  virtual Vec3 moving_wall_force(int index) const;
 };
 
 }  // namespace crumble

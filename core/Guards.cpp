@@ -44,7 +44,7 @@ void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, dou
     os << "the platen is at " << platen_height << " m, at or below the floor";
     fail(at, os.str());
   }
-  if (!(void_ratio > 0)) {
+  if (!at.open && !(void_ratio > 0)) {
     os << "the void ratio is " << void_ratio << " (<= 0): the grains overlap more than their own volume";
     fail(at, os.str());
   }
@@ -79,6 +79,24 @@ GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, co
         !std::isfinite(g.velocity.x) || !std::isfinite(g.velocity.y) || !std::isfinite(g.velocity.z))
       fail(at, "grain " + std::to_string(g.id) + " has a non-finite position or velocity");
     if (!s.containment) continue;
+    if (box.open) {
+      // Open scenes: grains below the domain have left as product before this check.
+      const bool out = g.position.x < box.domain.lo.x || g.position.x > box.domain.hi.x ||
+                       g.position.y < box.domain.lo.y || g.position.y > box.domain.hi.y ||
+                       (dimension == 3 && (g.position.z < box.domain.lo.z || g.position.z > box.domain.hi.z));
+      if (out) {
+        std::ostringstream os;
+        os << "grain " << g.id << " (d = " << g.shape->equivalent_diameter() << " m) has its centroid at ("
+           << g.position.x << ", " << g.position.y;
+        if (dimension == 3) os << ", " << g.position.z;
+        os << ") m, outside the scene's domain (" << box.domain.lo.x << " .. " << box.domain.hi.x << ", "
+           << box.domain.lo.y << " .. " << box.domain.hi.y;
+        if (dimension == 3) os << ", " << box.domain.lo.z << " .. " << box.domain.hi.z;
+        os << " m) other than through its bottom (the discharge): it has passed through a moving wall or was thrown out";
+        fail(at, os.str());
+      }
+      continue;
+    }
     const double up = dimension == 2 ? g.position.y : g.position.z;
     const bool out_x = g.position.x < 0 || g.position.x > box.lx;
     const bool out_y = dimension == 3 && (g.position.y < 0 || g.position.y > box.ly);
@@ -106,6 +124,10 @@ GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, co
         // hulled them (Zhu & Zhao 2019 §3.2): the engine separates them; not a failure.
         if (ia->second->origin >= 0 && ia->second->origin == ib->second->origin) continue;
         d = std::min(d, ib->second->shape->equivalent_diameter());
+      }
+      if (d < s.small_grain_fraction * at.reference_diameter) {
+        if (c.overlap > s.max_overlap_fraction * d) ++r.small_grain_overlaps;
+        continue;
       }
       r.max_overlap_fraction = std::max(r.max_overlap_fraction, c.overlap / d);
       if (c.overlap > s.max_overlap_fraction * d) {

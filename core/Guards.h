@@ -20,6 +20,11 @@ struct GuardSettings {
   // stay small; rigid packings stay below 0.08, but a fragment replaced by its hull may be
   // born overlapping a neighbour by ~0.3 of its own size, so the default is 0.5.
   double max_overlap_fraction = 0.5;
+  // Contacts whose smaller grain is below this fraction of the initial mean diameter are
+  // counted (summary.json: guard_small_grain_overlaps) instead of stopping the run: Bullet
+  // cannot keep a tiny hull fragment out of a large neighbour under load, and its volume is
+  // negligible in the void ratio (which is guarded on its own).
+  double small_grain_fraction = 0.25;
   // Kinetic energy may not exceed this multiple of the energy that can have entered the
   // system (initial kinetic energy + platen work + the weight of every grain falling the
   // container's height). A blow-up exceeds it by orders of magnitude.
@@ -44,6 +49,8 @@ struct GuardContext {
   double dt = 0;
   std::string engine;         // name, for the advice
   double energy_budget = 0;   // J (2D: J/m): energy that can have entered the system
+  double reference_diameter = 0;  // m: mean equivalent diameter of the initial grains
+  bool open = false;          // an open scene: no platen or void ratio; containment in the domain
 };
 
 // O(1) checks on the state the loop already has: finite values, platen above the floor,
@@ -55,6 +62,7 @@ void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, dou
 struct GuardReading {
   double max_overlap_fraction = 0;  // largest overlap / smaller diameter
   double energy_ratio = 0;          // kinetic energy / energy budget
+  long small_grain_overlaps = 0;    // contacts over the limit whose smaller grain is tiny
 };
 
 // O(grains + contacts) checks: every centroid inside the container, overlaps, kinetic

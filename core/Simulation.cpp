@@ -73,6 +73,8 @@ GrainId Simulation::add_grain(Grain g) {
   model_->assign_strength(g, ctx_.materials[g.material], r);
   // The kinetic energy a grain starts with counts as energy put in (guards).
   energy_in_ += kinetic_energy(std::span<const Grain>(&g, 1), ctx_.materials, ctx_.dimension);
+  // Running mean diameter of the initial grains (guards' reference size).
+  reference_diameter_ += (g.shape->equivalent_diameter() - reference_diameter_) / static_cast<double>(grains_.size() + 1);
   engine_->add_grain(g);
   grains_.push_back(std::move(g));
   return grains_.back().id;
@@ -96,6 +98,8 @@ SimulationState Simulation::saved_state() const {
   s.schedule_last_stress = schedule_.last_stress();
   s.max_platen_stress = max_platen_stress_;
   s.energy_in = energy_in_;
+  s.reference_diameter = reference_diameter_;
+  s.small_grain_overlaps = guard_max_.small_grain_overlaps;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -127,6 +131,8 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
   energy_in_ = st.energy_in;
+  reference_diameter_ = st.reference_diameter;
+  guard_max_.small_grain_overlaps = st.small_grain_overlaps;
   resumed_from_ = st;
   resumed_ = true;
 }
@@ -156,11 +162,13 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   at.time = time_;
   at.dt = dt;
   at.engine = engine_->name();
+  at.open = container_.open;
   const RunState st = state();
   at.platen_stress = st.platen_stress;
   check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
   if (!full || !settings_.guards.enabled) return;
   sync_grains();
+  at.reference_diameter = reference_diameter_;
   // Budget: what entered so far, plus every grain's weight falling the container's height
   // (at least 1 m/s² so that a scene without gravity still has a scale).
   double mass = 0;
@@ -171,6 +179,12 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
       check_invariants(settings_.guards, at, container_, ctx_.dimension, st.platen_height, grains_, ctx_.materials, cs);
   guard_max_.max_overlap_fraction = std::max(guard_max_.max_overlap_fraction, r.max_overlap_fraction);
   guard_max_.energy_ratio = std::max(guard_max_.energy_ratio, r.energy_ratio);
+  if (r.small_grain_overlaps > 0 && guard_max_.small_grain_overlaps == 0)
+    std::cerr << "warning: a grain smaller than " << settings_.guards.small_grain_fraction
+              << " of the initial mean diameter overlaps a neighbour by more than "
+              << settings_.guards.max_overlap_fraction << " of its size at step " << step_
+              << " (counted in summary.json: guard_small_grain_overlaps)\n";
+  guard_max_.small_grain_overlaps += r.small_grain_overlaps;
 }
 
 RunState Simulation::state() const {
@@ -180,12 +194,12 @@ RunState Simulation::state() const {
   s.dt = dt_;
   s.platen_force = engine_->platen_force();
   s.floor_force = engine_->floor_force();
-  s.platen_stress = s.platen_force / area();
+  s.platen_stress = area() > 0 ? s.platen_force / area() : 0;  // open scenes have no platen
   s.target_stress = loading_.target_stress(time_);
   s.platen_height = engine_->platen_position();
   s.axial_strain = initial_height_ > 0 ? (initial_height_ - s.platen_height) / initial_height_ : 0;
   const double vs = solid_volume();
-  s.void_ratio = vs > 0 ? (area() * s.platen_height - vs) / vs : 0;
+  s.void_ratio = vs > 0 && !container_.open ? (area() * s.platen_height - vs) / vs : 0;
   s.grains = grains_.size();
   s.breakage_events = events_;
   s.analyses = analyses_;
@@ -223,6 +237,7 @@ RunSummary Simulation::run(const Progress& progress) {
                                   std::to_string(bound) + " s (set simulation.auto_reduce_dt or a smaller dt)");
   }
   auto last_progress = Clock::now();
+  update_open_scene();
   while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
     if (settings_.max_steps > 0 && step_ >= settings_.max_steps) break;
     if (settings_.stop_after_breakage_events > 0 && events_ >= settings_.stop_after_breakage_events) break;
@@ -245,6 +260,7 @@ RunSummary Simulation::run(const Progress& progress) {
     engine_->set_platen(loading_.command(time_, area(), initial_height_));
     auto t0 = Clock::now();
     const double z_before = st.platen_height;
+    drive_walls(time_, dt);
     engine_->step(dt);
     timings_.engine += seconds_since(t0);
     time_ += dt;
@@ -253,10 +269,12 @@ RunSummary Simulation::run(const Progress& progress) {
     account_platen_work(st.platen_force, st.platen_height - z_before);
     if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
       t0 = Clock::now();
+      update_open_scene();
       check_guards("loading", dt, true);
       timings_.guards += seconds_since(t0);
     } else {
       GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->name(), 0};
+      at.open = container_.open;
       check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
     }
     sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
@@ -288,8 +306,10 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.analyses = analyses_;
   sum.fragment_fallbacks = fallbacks_;
   sum.dt_reductions = dt_reductions_;
+  finish_open_scene(sum);
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
+  sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
   auto t0 = Clock::now();
   for (auto& o : observers_) o->on_finish(*this, st, sum);
   timings_.observers += seconds_since(t0);
@@ -363,9 +383,15 @@ void Simulation::check_breakage(const RunState& st) {
     AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
                        results[k]};
     rec.analysis.fracture.reset();
-    for (auto& o : observers_) o->on_analysis(*this, rec);
     // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
-    if (!results[k].broken || frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0) < 2) continue;
+    // The record says what the builder made of it: "no_split" when the model broke the
+    // grain but the builder returned fewer than two pieces (the grain stays as it is),
+    // "chip" when one child and removed fines came out.
+    const std::size_t pieces = frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0);
+    if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
+    else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
+    for (auto& o : observers_) o->on_analysis(*this, rec);
+    if (!results[k].broken || pieces < 2) continue;
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;

@@ -13,6 +13,7 @@
 #include "core/Guards.h"
 #include "core/Loading.h"
 #include "core/Observer.h"
+#include "core/OpenScene.h"
 #include "core/Schedule.h"
 #include "core/Screening.h"
 
@@ -50,6 +51,8 @@ struct SimulationState {
   std::size_t grains_initial = 0;
   double mass_initial = 0, void_ratio_initial = 0, max_platen_stress = 0;
   double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
+  double reference_diameter = 0;  // m: mean diameter of the initial grains (guards)
+  long small_grain_overlaps = 0;
 };
 
 class Simulation {
@@ -64,6 +67,19 @@ class Simulation {
   // Adds a grain of the initial packing: assigns its id and samples its strength.
   GrainId add_grain(Grain g);
   void add_observer(std::shared_ptr<Observer> o);
+
+  // Moving walls (core/MovingWall.h): handed to the engine (which may refuse them) and
+  // driven by the loop with their prescribed motion. Open scenes (Container::open): rocks
+  // fed during the run and grains that leave through the domain's bottom as product
+  // (core/OpenScene.h; implemented in SimulationOpen.cpp).
+  int add_moving_wall(MovingWall w);
+  const std::vector<MovingWall>& moving_walls() const { return walls_; }
+  void set_feed(FeedSettings f);
+  const FeedSettings& feed() const { return feed_; }
+  long rocks_fed() const { return fed_; }
+  double mass_fed() const { return mass_fed_; }
+  const std::vector<ProductGrain>& product() const { return product_; }
+  double product_mass() const { return product_mass_; }
 
   // Checkpoint and resume: state() of the run so far (call sync_grains() for the grains),
   // and, instead of add_grain(), the grains and state of a checkpoint (container set first).
@@ -105,6 +121,9 @@ class Simulation {
   double area() const;
   double time_step(double stress) const;
   void check_breakage(const RunState& st);
+  void drive_walls(double t, double dt);  // set every moving wall for the step [t, t + dt]
+  void update_open_scene();               // discharge product, feed the next rock
+  void finish_open_scene(RunSummary& sum) const;
   std::unique_ptr<Engine> engine_;
   std::unique_ptr<BreakageModel> model_;
   std::unique_ptr<FragmentBuilder> builder_;
@@ -133,7 +152,15 @@ class Simulation {
   std::size_t initial_grains_ = 0;
   double initial_mass_ = 0, initial_void_ratio_ = 0;
   double energy_in_ = 0;
+  double reference_diameter_ = 0;
   GuardReading guard_max_;
+  std::vector<MovingWall> walls_;
+  std::vector<double> wall_radius_;  // bounding radius of each wall's shape
+  FeedSettings feed_;
+  long fed_ = 0;
+  double mass_fed_ = 0;  // kg of rocks fed during the run
+  std::vector<ProductGrain> product_;
+  double product_mass_ = 0;
 };
 
 }  // namespace crumble

@@ -1,4 +1,5 @@
 #include "scenarios/Packing.h"
+#include "scenarios/Walls.h"
 
 #include <algorithm>
 #include <cmath>
@@ -266,9 +267,10 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
   return spec;
 }
 
-PackingSpec scene_from_config(const Config& sc, int dim) {
+PackingSpec scene_from_config(const Config& sc, int dim, Rng& rng) {
   PackingSpec spec;
-  spec.type = sc.choice("type", "single_grain", {"single_grain"});
+  spec.type = sc.choice("type", "single_grain", {"single_grain", "jaw_crusher"});
+  if (spec.type == "jaw_crusher") return jaw_crusher_scene(sc, dim, rng);
   const double d = sc.positive("diameter", 2e-3);
   Config shc = sc.child("shape");
   const Shape::Ptr tmpl = shape_from_config(shc, dim, /*unit_size=*/true);
@@ -292,6 +294,8 @@ PackingSpec scene_from_config(const Config& sc, int dim) {
 
 SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
   sim.set_container(spec.container);
+  for (const auto& w : spec.walls) sim.add_moving_wall(w);
+  if (spec.feed.count > 0) sim.set_feed(spec.feed);
   for (const auto& pg : spec.grains) {
     Grain g;
     g.shape = pg.shape;

@@ -3,6 +3,7 @@
 // earlier run, so different engines and models start from the identical packing.
 #pragma once
 #include <atomic>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,12 @@ struct PackingSpec {
   bool settle = false;
   SettleSettings settle_settings;
   Container container;
+  // Moving walls (top-level "walls" and those a scene builds), rocks fed during the run and
+  // the run's length a scene fixes (s; 0 = the loading decides), figures for summary.json.
+  std::vector<MovingWall> walls;
+  FeedSettings feed;
+  double duration = 0;
+  std::map<std::string, double> scene_figures;
 };
 
 // Reads the "packing" and "container" objects; for "cloud" draws the grains now.
@@ -57,7 +64,8 @@ PackingSpec packing_from_config(const Config& packing, const Config& container, 
 //   {"type": "single_grain", "diameter": d, "shape": SHAPE (template, default sphere)}:
 //   one grain resting on the floor of a 3d × 3d box, the platen touching its top
 //   (seeds/000 §4.2: a grain crushed between two plates).
-PackingSpec scene_from_config(const Config& scene, int dimension);
+//   {"type": "jaw_crusher", ...}: the 2D jaw crusher of Harmon et al. 2020 §4 (scenarios/Walls.h).
+PackingSpec scene_from_config(const Config& scene, int dimension, Rng& rng);
 
 struct SettleResult {
   long steps = 0;

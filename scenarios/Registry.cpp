@@ -7,6 +7,9 @@
 #if CRUMBLE_WITH_BULLET
 #include "backends/bullet/BulletEngine.h"
 #endif
+#if CRUMBLE_WITH_ODE
+#include "backends/ode/OdeEngine.h"
+#endif
 #if CRUMBLE_WITH_CGAL
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
@@ -53,6 +56,11 @@ Table<EngineFactory>& engines() {
 #if CRUMBLE_WITH_BULLET
     t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (seeds/000)",
            [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3}});
+#endif
+#if CRUMBLE_WITH_ODE
+    t.add({"ode", "Open Dynamics Engine 0.16 rigid bodies, QuickStep (projected SOR) contact dynamics, Coulomb "
+                  "friction (dContactApprox1)",
+           [](const Config& c, const EngineContext& ctx) { return make_ode_engine(c, ctx); }, {}, {3}});
 #endif
     return t;
   }();

@@ -1,5 +1,6 @@
 #include "scenarios/ScenarioFactory.h"
 
+#include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -7,6 +8,7 @@
 #include "geometry/Format.h"
 #include "scenarios/InputChecks.h"
 #include "scenarios/Registry.h"
+#include "scenarios/Walls.h"
 
 namespace crumble {
 
@@ -141,9 +143,15 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   if (root.has("scene")) {
     if (root.has("packing") || root.has("container"))
       root.fail("scene", "a scene builds its own container and packing: remove 'packing' and 'container'");
-    sc.packing = scene_from_config(root.child("scene"), dim);
+    sc.packing = scene_from_config(root.child("scene"), dim, packing_rng);
   } else {
     sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
+  }
+  {
+    // Moving walls given by shapes and a prescribed motion (core/MovingWall.h).
+    auto wcs = root.children("walls");
+    for (std::size_t i = 0; i < wcs.size(); ++i)
+      sc.packing.walls.push_back(wall_from_config(wcs[i], dim, "wall_" + std::to_string(i)));
   }
   check_packing_materials(sc.packing, ctx.materials.size());
   check_explicit_grains(sc.packing, dim);
@@ -179,6 +187,17 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
                         "the engine '" + et + "' cannot change friction while settling; use 1 or lsdem");
     engine->set_friction_scale(1.0);
   }
+  if (!sc.packing.walls.empty()) {
+    // An engine without moving walls refuses them now, naming itself, not after settling.
+    nlohmann::json copy = ec.doc();
+    Config probe_cfg(copy);
+    try {
+      eentry.make(probe_cfg, ctx)->add_moving_wall(sc.packing.walls.front());
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError("/engine/type", std::string(e.what()) + " (moving walls come from " +
+                                            (root.has("walls") ? "/walls" : "/scene") + ")");
+    }
+  }
   auto model = bentry.make(bc, ctx);
   accept_sibling_options(ec, engines(), et, ctx, sc.notes);
   accept_sibling_options(bc, breakage_models(), bt, ctx, sc.notes);
@@ -201,6 +220,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     g.enabled = gc.boolean("enabled", g.enabled);
     g.max_overlap_fraction = gc.number("max_overlap_fraction", g.max_overlap_fraction, 0.0, 1.0);
     g.energy_factor = gc.number("energy_factor", g.energy_factor, 0.0);
+    g.small_grain_fraction = gc.number("small_grain_fraction", g.small_grain_fraction, 0.0, 1.0);
     g.containment = gc.boolean("containment", g.containment);
   }
   ss.threads = sc.threads;
@@ -208,7 +228,16 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
 
   LoadingSettings ls;
   Config lc = root.child("loading");
-  ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate", "none"});
+  if (sc.packing.duration > 0) {
+    // The scene fixes the run's length (jaw crusher: scene.cycles revolutions).
+    ls.mode = lc.choice("mode", "none", {"none"});
+    ls.duration = lc.number("duration", sc.packing.duration, 0.0);
+    if (std::abs(ls.duration - sc.packing.duration) > 1e-9 * sc.packing.duration)
+      lc.fail("duration", "the scene runs for " + fmt_num(sc.packing.duration) +
+                              " s (scene.cycles revolutions); change scene.cycles instead, or leave loading out");
+  } else {
+    ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate", "none"});
+  }
   if (ls.mode == "none") {
     ls.duration = lc.number("duration", 0.0, 0.0);
   } else if (ls.mode == "stress_ramp") {
@@ -255,6 +284,9 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   sc.output.vtk_final = oc.boolean("vtk_final", true);
   sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
+  if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))
+    oc.fail("checkpoint_every", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
+                                "for scenarios with walls or a jaw_crusher scene");
 
 
   root.check_unknown();

@@ -136,6 +136,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   if (sc.output.checkpoint_every > 0)
     sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());
+  if (sim.container().open) sim.add_observer(std::make_shared<ProductWriter>(out, sc.packing.scene_figures));
 }
 
 Json shape_report(const std::string& spec, const std::string& repr, double spacing, long nodes) {

@@ -5,10 +5,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 
+#include "core/Analysis.h"
 #include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/ShapeMetrics.h"
@@ -530,6 +532,56 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
     if (it->is_number_float() && !std::isfinite(it->get<double>()))
       throw std::runtime_error("summary value '" + it.key() + "' is not finite");
   return j;
+}
+
+ProductWriter::ProductWriter(const std::string& dir, std::map<std::string, double> figures)
+    : dir_(dir), figures_(std::move(figures)) {}
+
+void ProductWriter::on_finish(const Simulation& sim, const RunState&, RunSummary& sum) {
+  const auto& product = sim.product();
+  const double fines = sum.mass_removed;  // removed inside the scene: finer than every sieve
+  std::vector<double> sizes, masses;
+  double smin = std::numeric_limits<double>::infinity(), smax = 0;
+  for (const auto& p : product) {
+    sizes.push_back(p.sieve);
+    masses.push_back(p.mass);
+    smin = std::min(smin, p.sieve);
+    smax = std::max(smax, p.sieve);
+  }
+  const double total = sim.product_mass() + fines;
+  std::ostringstream os;
+  os << std::setprecision(10) << "sieve_m,passing_percent,passing_mass_kg\n";
+  if (!product.empty()) {
+    // Sieves: the series 1 mm · 2^(k/2) (a √2 series, as laboratory sieves) spanning the product.
+    const int k0 = static_cast<int>(std::floor(2 * std::log2(smin / 1e-3))) - 1;
+    const int k1 = static_cast<int>(std::ceil(2 * std::log2(smax / 1e-3))) + 1;
+    for (int k = k0; k <= k1; ++k) {
+      const double sv = 1e-3 * std::pow(2.0, k / 2.0);
+      double pass = fines;
+      for (const auto& p : product)
+        if (p.sieve < sv) pass += p.mass;
+      os << sv << ',' << 100.0 * pass / total << ',' << pass << '\n';
+    }
+  }
+  write_file_atomic(dir_ + "/product_psd.csv", os.str());
+  std::ostringstream pr;
+  pr << std::setprecision(10) << "time,grain,origin,generation,equivalent_diameter_m,sieve_m,mass_kg\n";
+  for (const auto& p : product)
+    pr << p.time << ',' << p.id << ',' << p.origin << ',' << p.generation << ',' << p.diameter << ',' << p.sieve << ','
+       << p.mass << '\n';
+  write_file_atomic(dir_ + "/product.csv", pr.str());
+  for (const auto& [k, v] : figures_) sum.extra[k] = v;
+  sum.extra["product_psd_mass_kg"] = total;
+  if (!product.empty()) {
+    // d50 of the product PSD (fines at size 0).
+    if (fines > 0) {
+      sizes.push_back(0.0);
+      masses.push_back(fines);
+    }
+    sum.extra["product_d50_m"] = mass_quantile(sizes, masses, 0.5);
+    sum.extra["product_sieve_min_m"] = smin;
+    sum.extra["product_sieve_max_m"] = smax;
+  }
 }
 
 }  // namespace crumble

@@ -154,4 +154,20 @@ nlohmann::json summary_json(const RunSummary& s, const std::string& scenario, co
                             const std::string& breakage, const std::string& fragments, std::uint64_t seed,
                             int threads);
 
+// Open scenes (jaw crusher, Harmon et al. 2020 §4.2): product_psd.csv — the size
+// distribution by mass of what left through the discharge, at sieve sizes (the minor-axis
+// approximation of §4.2, core/Analysis.h sieve_size), with the fines removed inside the
+// scene counted as passing every sieve (§3.4: removed particles count in the PSD);
+// product.csv — one row per grain that left; summary figures product_mass_kg, product_d50_m
+// and the scene's own figures.
+class ProductWriter : public Observer {
+ public:
+  ProductWriter(const std::string& dir, std::map<std::string, double> figures);
+  void on_finish(const Simulation& sim, const RunState& s, RunSummary& sum) override;
+
+ private:
+  std::string dir_;
+  std::map<std::string, double> figures_;
+};
+
 }  // namespace crumble

@@ -17,6 +17,7 @@
 
 #include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
+#include "core/Platen.h"
 
 // Mixing the float and double builds of Bullet corrupts memory silently (METHODS.md §2).
 #ifndef BT_USE_DOUBLE_PRECISION
@@ -210,9 +211,11 @@ struct BulletEngine::Impl {
   std::vector<std::unique_ptr<WallBody>> walls;  // floor, x-, x+, y-, y+ (static planes)
   std::unique_ptr<WallBody> platen;
   double platen_half_thickness = 0;  // internal
-  PlatenCommand command;
+  // Command, mass rule and the kinematic motion come from the shared platen piece
+  // (core/Platen.h); under a force command Bullet integrates the platen as a dynamic body
+  // (implicitly coupled to the contacts by the solver) and the driver is synced to it.
+  PlatenDriver driver;
   bool platen_dynamic = false;
-  double platen_z = 0;  // SI, bottom face, tracked exactly in velocity mode
 
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
   std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
@@ -314,11 +317,8 @@ struct BulletEngine::Impl {
   void build_container() {
     remove_container_bodies();
     const double lx = to_int(container.lx), ly = to_int(container.ly);
-    walls.push_back(make_static_plane(kFloor, {0, 0, 1}, 0));
-    walls.push_back(make_static_plane(kWallXMin, {1, 0, 0}, 0));
-    walls.push_back(make_static_plane(kWallXMax, {-1, 0, 0}, -lx));
-    walls.push_back(make_static_plane(kWallYMin, {0, 1, 0}, 0));
-    walls.push_back(make_static_plane(kWallYMax, {0, -1, 0}, -ly));
+    for (const WallPlane& w : container_planes(container, 3))
+      if (w.id != kPlaten) walls.push_back(make_static_plane(w.id, w.normal, to_int(w.offset())));
     // Platen: a thick box a little wider than the box (it only meets grains), bottom face
     // at `height`. Its margin lies inside the box, so the face stays where it is.
     platen = std::make_unique<WallBody>();
@@ -329,7 +329,7 @@ struct BulletEngine::Impl {
     platen->shape = std::move(box);
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, platen->shape.get());
     info.m_startWorldTransform.setIdentity();
-    info.m_startWorldTransform.setOrigin(btVector3(0.5 * lx, 0.5 * ly, to_int(platen_z) + platen_half_thickness));
+    info.m_startWorldTransform.setOrigin(btVector3(0.5 * lx, 0.5 * ly, to_int(driver.position()) + platen_half_thickness));
     platen->body = std::make_unique<btRigidBody>(info);
     platen->body->setUserPointer(&platen->tag);
     platen->body->setUserIndex2(kCrumbleTag);
@@ -341,8 +341,7 @@ struct BulletEngine::Impl {
   }
 
   double platen_mass() const {
-    const double m = container.platen_mass > 0 ? container.platen_mass : total_mass;
-    return std::max(m, 1e-30) * opt.mass_scale;
+    return std::max(crumble::platen_mass(container, total_mass), 1e-30) * opt.mass_scale;
   }
 
   // Kinematic body for velocity control; dynamic body moving along z only for force
@@ -350,7 +349,7 @@ struct BulletEngine::Impl {
   void configure_platen_body() {
     btRigidBody* b = platen->body.get();
     if (b->isInWorld()) world->removeRigidBody(b);
-    const bool dynamic = command.mode == PlatenCommand::Mode::Force;
+    const bool dynamic = driver.force_driven();
     const btVector3 v = b->getLinearVelocity();
     if (dynamic) {
       b->setCollisionFlags(b->getCollisionFlags() & ~btCollisionObject::CF_KINEMATIC_OBJECT);
@@ -376,7 +375,7 @@ struct BulletEngine::Impl {
   }
 
   double current_platen_z() const {
-    if (!platen || !platen_dynamic) return platen_z;
+    if (!platen || !platen_dynamic) return driver.position();
     return (platen->body->getWorldTransform().getOrigin().z() - platen_half_thickness) / scale;
   }
 
@@ -416,11 +415,13 @@ struct BulletEngine::Impl {
     } else {
       // Bullet inflates a hull by its margin: inset the hull by the same amount so the
       // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer
-      // to a face than twice the margin gets a smaller margin.
+      // to a face than twice the margin gets a smaller margin; a flat hull (its centroid on
+      // or, by rounding, outside a face) gets none and is taken as it is.
       const TriMesh& hull = shape->convex_hull();
-      double margin = opt.margin_fraction * d;
-      margin = std::min(margin, 0.5 * convex_inradius_about_centroid(hull));
-      const std::vector<Vec3> inset = inset_convex_vertices(hull, margin);
+      const double inradius = convex_inradius_about_centroid(hull);
+      double margin = 0;
+      if (inradius > 0 && std::isfinite(inradius)) margin = std::min(opt.margin_fraction * d, 0.5 * inradius);
+      const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(hull, margin) : hull.vertices;
       const Quat to_principal = e->principal.conjugate();
       std::vector<btScalar> pts;
       pts.reserve(3 * inset.size());
@@ -522,19 +523,19 @@ struct BulletEngine::Impl {
     si.m_leastSquaresResidualThreshold = vres * vres;
     btRigidBody* p = platen->body.get();
     if (platen_dynamic) {
-      p->applyCentralForce(btVector3(0, 0, -command.value * scale));
+      p->applyCentralForce(btVector3(0, 0, driver.applied_force() * scale));
     } else {
       // Kinematic: Bullet derives the velocity from the new transform.
-      platen_z += command.value * dt;
+      driver.advance(dt, 0, 0);
       btTransform t = p->getWorldTransform();
-      t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(platen_z) + platen_half_thickness));
+      t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(driver.position()) + platen_half_thickness));
       p->setWorldTransform(t);
     }
     last_dt = dt;
     solver->max_iterations = 0;
     solver->max_change = 0;
     world->stepSimulation(dt, 0);  // exactly one internal step of dt
-    if (platen_dynamic) platen_z = current_platen_z();
+    if (platen_dynamic) driver.sync(current_platen_z(), p->getLinearVelocity().z() / scale);
   }
 
   // Impulse (internal units) on body0 of a manifold: normal plus both friction directions.
@@ -638,20 +639,23 @@ struct BulletEngine::Impl {
   }
 
   void set_container(const Container& c) {
+    if (c.open)
+      throw std::invalid_argument("bullet: open containers (no floor or walls, e.g. the jaw crusher scene) are not "
+                                  "supported; use engine \"lsdem\"");
     if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
         !std::isfinite(c.height))
       throw std::invalid_argument("bullet: container needs finite lx, ly, height > 0");
     if (!(c.platen_mass >= 0)) throw std::invalid_argument("bullet: container platen_mass must be >= 0");
     container = c;
     have_container = true;
-    platen_z = c.height;
+    driver.reset(c.height);
     if (scale > 0) build_container();
   }
 
   void set_platen(const PlatenCommand& cmd) {
     if (!std::isfinite(cmd.value)) throw std::invalid_argument("bullet: platen command value is not finite");
-    const bool mode_change = cmd.mode != command.mode;
-    command = cmd;
+    const bool mode_change = cmd.mode != driver.command().mode;
+    driver.set_command(cmd);
     if (platen && mode_change) configure_platen_body();
   }
 };

@@ -158,8 +158,7 @@ void LsdemEngine::set_container(const Container& c) {
     throw std::invalid_argument("lsdem: container sizes and platen mass must be >= 0");
   container_ = c;
   has_container_ = true;
-  platen_pos_ = c.height;
-  platen_vel_ = 0;
+  platen_.reset(c.height);
 }
 
 LsdemEngine::ShapeData& LsdemEngine::shape_data(const Shape::Ptr& s) {
@@ -286,6 +285,26 @@ void LsdemEngine::set_shape_wall_motion(int wall, const Vec3& v, const Vec3& w) 
   }
 }
 
+int LsdemEngine::add_moving_wall(const MovingWall& w) {
+  return add_shape_wall(w.shape, w.position, w.orientation);
+}
+
+void LsdemEngine::set_moving_wall(int wall, const WallKinematics& k) {
+  if (wall < 0 || wall >= static_cast<int>(walls_kin_.size()))
+    throw std::invalid_argument("lsdem: no moving wall " + std::to_string(wall));
+  if (!is_finite(k.position)) throw std::invalid_argument("lsdem: moving wall position is not finite");
+  set_shape_wall_motion(wall, k.velocity, k.angular_velocity);
+  Body& b = walls_kin_[wall];
+  b.x = k.position;
+  b.q = k.orientation.normalized();
+  if (ctx_.dimension == 2) {
+    b.x.z = 0;
+    const double n = std::hypot(b.q.w, b.q.z);
+    b.q = Quat{b.q.w / n, 0, 0, b.q.z / n};
+  }
+  b.R = b.q.matrix();
+}
+
 Vec3 LsdemEngine::shape_wall_position(int wall) const { return walls_kin_.at(wall).x; }
 Quat LsdemEngine::shape_wall_orientation(int wall) const { return walls_kin_.at(wall).q; }
 Vec3 LsdemEngine::shape_wall_force(int wall) const { return shape_wall_force_.at(wall); }
@@ -336,22 +355,8 @@ double LsdemEngine::max_stable_dt() const {
 }
 
 std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
-  std::vector<Wall> w;
-  if (!has_container_) return w;
-  const int u = up();
-  Vec3 e_up, e_x{1, 0, 0}, e_y{0, 1, 0};
-  e_up[u] = 1;
-  w.push_back({kFloor, {}, e_up, {}});
-  if (container_.height > 0) w.push_back({kPlaten, e_up * platen_pos_, -e_up, e_up * platen_vel_});
-  if (container_.lx > 0) {
-    w.push_back({kWallXMin, {}, e_x, {}});
-    w.push_back({kWallXMax, e_x * container_.lx, -e_x, {}});
-  }
-  if (ctx_.dimension == 3 && container_.ly > 0) {
-    w.push_back({kWallYMin, {}, e_y, {}});
-    w.push_back({kWallYMax, e_y * container_.ly, -e_y, {}});
-  }
-  return w;
+  if (!has_container_ || container_.open) return {};  // open scenes: moving walls only
+  return container_planes(container_, ctx_.dimension, platen_.position(), platen_.velocity());
 }
 
 // ---- One step ----
@@ -800,22 +805,16 @@ void LsdemEngine::integrate(double dt) {
     b.turned = wn * dt;
   }
   // Platen along the vertical axis.
-  if (has_container_ && container_.height > 0) {
-    if (platen_cmd_.mode == PlatenCommand::Mode::Velocity) {
-      platen_vel_ = platen_cmd_.value;
-    } else {
-      double M = container_.platen_mass * s_.mass_scale;
-      if (!(M > 0)) {
-        M = 0;
-        for (const auto& b : bodies_) M += b.m;
-      }
-      if (M > 0) {
-        // Grains push it up with platen_force_, the command pushes it down.
-        const double acc = (platen_force_ - platen_cmd_.value) / M - s_.global_damping * platen_vel_;
-        platen_vel_ += acc * dt;
-      }
+  if (has_container_ && container_.height > 0 && !container_.open) {
+    // Mass rule and semi-implicit update shared by every engine (core/Platen.h); the
+    // global damping acts on the platen too.
+    double M = 0;
+    if (platen_.force_driven() && !(container_.platen_mass > 0)) {
+      for (const auto& b : bodies_) M += b.m;  // scaled masses
+      M /= s_.mass_scale;
     }
-    platen_pos_ += platen_vel_ * dt;
+    M = platen_mass(container_, M, s_.mass_scale);
+    platen_.advance(dt, platen_force_, M, s_.global_damping);
   }
 }
 

@@ -52,6 +52,7 @@
 
 #include "core/Config.h"
 #include "core/Engine.h"
+#include "core/Platen.h"
 #include "geometry/LevelSetGrid.h"
 
 namespace crumble {
@@ -120,8 +121,8 @@ class LsdemEngine final : public Engine {
   void read_state(std::span<Grain> grains) const override;
   std::vector<Contact> contacts() const override { return contacts_; }
 
-  void set_platen(const PlatenCommand& cmd) override { platen_cmd_ = cmd; }
-  double platen_position() const override { return platen_pos_; }
+  void set_platen(const PlatenCommand& cmd) override { platen_.set_command(cmd); }
+  double platen_position() const override { return platen_.position(); }
   double platen_force() const override { return platen_force_; }
   double floor_force() const override { return floor_force_; }
 
@@ -137,6 +138,11 @@ class LsdemEngine final : public Engine {
   Vec3 shape_wall_position(int wall) const;
   Quat shape_wall_orientation(int wall) const;
   Vec3 shape_wall_force(int wall) const;
+
+  // The engine-neutral moving walls (core/MovingWall.h) are shape walls.
+  int add_moving_wall(const MovingWall& w) override;
+  void set_moving_wall(int index, const WallKinematics& k) override;
+  Vec3 moving_wall_force(int index) const override { return shape_wall_force(index); }
 
   const LsdemSettings& settings() const { return s_; }
   const LsdemStats& stats() const { return stats_; }
@@ -170,11 +176,7 @@ class LsdemEngine final : public Engine {
       return static_cast<std::size_t>((a * 0x9E3779B97F4A7C15ull) ^ (b + 0x7F4A7C159E3779B9ull + (a << 6) + (a >> 2)));
     }
   };
-  struct Wall {
-    int id;
-    Vec3 point, normal;  // normal points into the box
-    Vec3 velocity;
-  };
+  using Wall = WallPlane;  // normal points into the box
   ShapeData& shape_data(const Shape::Ptr& s);
   void compute_forces(double dt);
   void integrate(double dt);
@@ -195,8 +197,8 @@ class LsdemEngine final : public Engine {
   long stamp_ = 0;
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
-  PlatenCommand platen_cmd_;
-  double platen_pos_ = 0, platen_vel_ = 0, platen_force_ = 0, floor_force_ = 0;
+  PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly
+  double platen_force_ = 0, floor_force_ = 0;
   double friction_scale_ = 1;  // set_friction_scale (settling)
   LsdemStats stats_;
 };

@@ -45,6 +45,7 @@ StressOptions stress_options_from_config(const Config& cfg) {
                                  "eq. 8); this scenario's criterion is '" + o.criterion + "'");
   }
   o.weibull = cfg.boolean("weibull", o.weibull);
+  o.min_piece_fraction = cfg.number("min_piece_fraction", o.min_piece_fraction, 0.0, 0.45);
   return o;
 }
 
@@ -140,6 +141,34 @@ std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Ve
   return make(axes[k] - a * dot(axes[k], a));
 }
 
+CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction) {
+  require(fraction < 0.5, "min_piece_fraction must be < 0.5");
+  if (!(fraction > 0)) return plane;
+  const Aabb b = shape.bounds();
+  const bool flat = shape.dimension() == 2;
+  const int n = flat ? 64 : 24;
+  const Vec3 size = b.hi - b.lo;
+  // Heights along the normal of the lattice points inside the shape: their quantiles are
+  // the offsets that leave a given volume fraction on the negative side.
+  std::vector<double> h;
+  h.reserve(static_cast<std::size_t>(n) * n * (flat ? 1 : n));
+  for (int k = 0; k < (flat ? 1 : n); ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const Vec3 p{b.lo.x + size.x * (i + 0.5) / n, b.lo.y + size.y * (j + 0.5) / n,
+                     flat ? 0.0 : b.lo.z + size.z * (k + 0.5) / n};
+        if (shape.contains(p)) h.push_back(dot(plane.normal, p));
+      }
+  if (h.size() < 16) return plane;  // too thin to sample: leave the paper's plane alone
+  std::sort(h.begin(), h.end());
+  const std::size_t m = h.size();
+  const std::size_t q = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(m)));
+  const double lo = h[std::min(q, m - 1)], hi = h[m - 1 - std::min(q, m - 1)];
+  CutPlane out = plane;
+  if (lo <= hi) out.offset = std::clamp(plane.offset, lo, hi);
+  return out;
+}
+
 // ---------------------------------------------------------------- the model
 
 StressModel::StressModel(StressOptions o, int dimension)
@@ -147,6 +176,7 @@ StressModel::StressModel(StressOptions o, int dimension)
   require(entry_ != nullptr, "unknown criterion '" + o_.criterion + "'; known: " + joined(stress::criterion_names()));
   require(dim_ == 2 || dim_ == 3, "dimension must be 2 or 3");
   require(o_.weibull_modulus > 0 && o_.reference_diameter > 0, "weibull_modulus and reference_diameter must be > 0");
+  require(o_.min_piece_fraction >= 0 && o_.min_piece_fraction < 0.5, "min_piece_fraction must be in [0, 0.5)");
   if (o_.strength <= 0) o_.strength = entry_->default_strength;
   if (o_.tensile_strength <= 0) o_.tensile_strength = entry_->default_tensile_strength;
   criterion_ = entry_->make();
@@ -258,8 +288,11 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   const Vec3 f_body = g.orientation.conjugate().rotate(order.front()->force);
   const auto plane = fracture_plane(pts, f_body, dim_, g.shape->equivalent_diameter());
   if (!plane) return finish("degenerate_contacts");
+  // §3.3 fixes the plane's orientation by the contacts (eqs. 18–20); its offset is kept
+  // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction).
+  const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, o_.min_piece_fraction);
   a.broken = true;
-  a.fracture = CuttingSurfaces{{*plane}};
+  a.fracture = CuttingSurfaces{{cut}};
   return finish("split");
 }
 

@@ -27,6 +27,7 @@
 #include "core/BreakageModel.h"
 #include "core/Config.h"
 #include "core/Engine.h"
+#include "geometry/Shape.h"
 
 namespace crumble {
 
@@ -37,6 +38,12 @@ struct StressOptions {
   double strength = 0;                  // "strength" σ0, Pa; 0 = the criterion's Table 2 value
   double tensile_strength = 0;          // "tensile_strength" (max_principal), Pa; 0 = Table 2
   bool weibull = true;                  // "weibull": false = σ0 scaled by eq. 13 from d0 only
+  // "min_piece_fraction": the fracture plane is moved along its normal (orientation kept)
+  // until each side holds at least this fraction of the grain's volume (2D: area). Our
+  // decision, not the paper's: Harmon et al. 2020 §3.3 put the plane through the contacts
+  // as is, which shaves a sliver (or misses the grain) when the strongest contacts sit
+  // close together; the grain then "breaks" at every check without changing. 0 = off.
+  double min_piece_fraction = 0.1;
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
 };
@@ -67,6 +74,13 @@ stress::Principal principal_stresses(const Mat3& sigma, int dimension);
 //   degenerate_contacts). The result is finite, with a unit normal.
 std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Vec3& strongest_force, int dimension,
                                        double length_scale);
+
+// `plane` moved along its normal so that each side of it holds at least `fraction` of
+// the shape's volume (2D: area), estimated on a lattice of cell centres over the shape's
+// bounds (24³ in 3D, 64² in 2D) with Shape::contains; the normal is unchanged. A plane
+// that already satisfies it is returned unchanged; fraction <= 0 returns it unchanged.
+// fraction must be < 0.5.
+CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction);
 
 class StressModel final : public BreakageModel {
  public:

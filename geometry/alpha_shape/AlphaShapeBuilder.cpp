@@ -91,9 +91,10 @@ TriMesh cube_hull(const std::vector<Vec3>& pts, double spacing) {
 
 AlphaShapeBuilder::AlphaShapeBuilder(AlphaShapeBuilderOptions opt) : opt_(std::move(opt)) {
   if (!(opt_.hull_diameter >= 0) || !(opt_.hull_convexity >= 0) || !(opt_.min_piece_volume_fraction >= 0) ||
-      !(opt_.min_piece_volume_fraction < 0.5))
+      !(opt_.min_piece_volume_fraction < 0.5) ||
+      !(opt_.min_piece_thickness_fraction >= 0) || !(opt_.min_piece_thickness_fraction <= 0.5))
     throw std::invalid_argument("AlphaShapeBuilder: need hull_diameter >= 0, hull_convexity >= 0, "
-                                "0 <= min_piece_volume_fraction < 0.5");
+                                "0 <= min_piece_volume_fraction < 0.5, 0 <= min_piece_thickness_fraction <= 0.5");
 }
 
 FragmentResult AlphaShapeBuilder::build(const Shape& parent, const Fracture& fracture) const {
@@ -217,27 +218,69 @@ FragmentResult AlphaShapeBuilder::from_planes(const Shape& parent, const Cutting
                                               std::vector<ChildReport>* rep) const {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<ClipPlane> planes;
-  for (const auto& p : cs.planes) planes.push_back({p.normal, p.offset});
-  std::vector<TriMesh> pieces = split_by_planes(parent.mesh(), planes);
+  for (const auto& p : cs.planes) {
+    if (!is_finite(p.normal) || !std::isfinite(p.offset) || !(norm(p.normal) > 0))
+      throw std::invalid_argument("split_by_planes: a cutting plane has a zero or non-finite normal/offset");
+    planes.push_back({p.normal, p.offset});
+  }
   FragmentResult out;
   out.method = "plane_cut";
-  // The parent's mesh may differ from its analytic volume (a sphere's icosphere): the
-  // threshold and the rescaling below both refer to parent.volume().
+  std::vector<TriMesh> pieces;
+  try {
+    pieces = split_by_planes(parent.mesh(), planes);
+  } catch (const std::exception&) {
+    // The parent's mesh cannot be cut (an alpha-shape child that CGAL finds
+    // self-intersecting, or a degenerate cut): cut its convex hull instead, which is
+    // always a valid solid. Counted as a fallback; the rescaling below restores the volume.
+    ++out.fallbacks;
+    out.method = "plane_cut_hull";
+    try {
+      pieces = split_by_planes(parent.convex_hull(), planes);
+    } catch (const std::exception&) {
+      out.method = "no_split";  // nothing can be cut: the grain stays whole
+      return out;
+    }
+  }
+  // Pieces are dropped as removed volume (fines, FragmentBuilder.h) when smaller than
+  // min_piece_volume_fraction × V_parent or thinner than min_piece_thickness_fraction ×
+  // d_parent (thickness = twice the distance from the piece's centroid to the nearest face
+  // of its convex hull): a plane grazing the surface leaves slivers that no engine can
+  // take as a body (Bullet insets a hull by its collision margin). The mesh volumes are
+  // scaled by V_parent / Σ mesh volumes (the parent's mesh may differ from its analytic
+  // volume, e.g. a sphere's icosphere), so children + removed = V_parent exactly.
+  const double d_parent = parent.equivalent_diameter();
+  double v_all = 0, v_removed = 0;
   std::vector<TriMesh> kept;
   for (auto& m : pieces) {
-    if (polyhedron_mass_properties(m).volume < opt_.min_piece_volume_fraction * parent.volume()) {
+    const double v = polyhedron_mass_properties(m).volume;
+    v_all += v;
+    double thickness = 0;
+    try {
+      thickness = 2 * convex_inradius_about_centroid(convex_hull(m.vertices));
+    } catch (const std::invalid_argument&) {
+      thickness = 0;  // flat: no hull
+    }
+    if (v < opt_.min_piece_volume_fraction * parent.volume() ||
+        !(thickness >= opt_.min_piece_thickness_fraction * d_parent)) {
       ++out.fallbacks;
+      v_removed += v;
       continue;
     }
     kept.push_back(std::move(m));
   }
+  if (kept.empty() || !(v_all > 0)) {
+    out.method = "no_split";
+    return out;
+  }
+  const double k = parent.volume() / v_all;
+  out.removed_volume = k * v_removed;
   std::vector<ChildReport> reports(kept.size());
   const double dt = seconds_since(t0);
   for (auto& r : reports) {
-    r.method = "plane_cut";
+    r.method = out.method;
     r.seconds = dt / static_cast<double>(reports.size());
   }
-  out.children = finish(std::move(kept), parent.volume(), &reports);
+  out.children = finish(std::move(kept), parent.volume() - out.removed_volume, &reports);
   if (rep) *rep = std::move(reports);
   return out;
 }
@@ -296,7 +339,8 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
 //   alpha_min_growth           0.0        min relative alpha increase between candidates
 //   alpha_input                "all_points" (cluster points + fracture points) | "boundary_points"
 //   scale_about                "parent_centroid" | "child_centroid"
-//   min_piece_volume_fraction  1e-6       plane cuts: drop slivers below this × V_parent
+//   min_piece_volume_fraction  1e-6       plane cuts: pieces below this × V_parent are removed (fines)
+//   min_piece_thickness_fraction 0.02     plane cuts: pieces thinner than this × d_parent are removed
 std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "alpha_shape");
   AlphaShapeBuilderOptions o;
@@ -313,6 +357,7 @@ std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, con
   o.scale_about_parent =
       cfg.choice("scale_about", "parent_centroid", {"parent_centroid", "child_centroid"}) == "parent_centroid";
   o.min_piece_volume_fraction = cfg.number("min_piece_volume_fraction", 1e-6, 0.0, 0.1);
+  o.min_piece_thickness_fraction = cfg.number("min_piece_thickness_fraction", 0.02, 0.0, 0.5);
   if (ctx.dimension != 3) cfg.fail("type", "fragment builder 'alpha_shape' is 3D only (scenario dimension " +
                                                std::to_string(ctx.dimension) + ")");
   return std::make_unique<AlphaShapeBuilder>(o);

@@ -37,10 +37,14 @@ struct AlphaShapeBuilderOptions {
   // the children's centroids move by the factor); false = each child's own centroid
   // (centroids stay where they were built).
   bool scale_about_parent = true;
-  // CuttingSurfaces: pieces smaller than this fraction of the parent's volume (slivers
-  // of a plane grazing the surface) are dropped — counted as a fallback — and their
-  // volume is given back to the others by the rescaling.
+  // CuttingSurfaces: pieces smaller than min_piece_volume_fraction × V_parent, or thinner
+  // than min_piece_thickness_fraction × d_parent (twice the distance from the piece's
+  // centroid to its hull's nearest face), are slivers of a plane grazing the surface: they
+  // are removed as fines (FragmentResult::removed_volume) and counted as a fallback.
+  // A parent mesh that cannot be cut (self-intersecting) is replaced by its convex hull
+  // (method "plane_cut_hull", one fallback).
   double min_piece_volume_fraction = 1e-6;
+  double min_piece_thickness_fraction = 0.02;
 };
 
 // Per-child diagnostics (benchmarks, tests).

@@ -370,6 +370,59 @@ TEST(AlphaShapeBuilder, BoxCutByTwoPlanesGivesFourExactPieces) {
   EXPECT_EQ(AlphaShapeBuilder().build(*parent, miss).children.size(), 1u);
 }
 
+// A plane grazing a face leaves a sliver thinner than min_piece_thickness_fraction × d:
+// removed as fines (Bullet could not inset its hull by a collision margin), the other
+// piece is the child, and children + removed = parent exactly.
+TEST(AlphaShapeBuilder, ThinSliverOfAPlaneCutIsRemovedVolume) {
+  const Vec3 h{1e-3, 0.8e-3, 0.5e-3};
+  const auto parent = Shape::box(h);
+  const double t = 10e-6;  // 10 µm sliver; 0.02 × d_parent = 37 µm
+  ASSERT_LT(t, 0.02 * parent->equivalent_diameter());
+  CuttingSurfaces cs;
+  cs.planes.push_back({{1, 0, 0}, h.x - t});
+  const FragmentResult r = AlphaShapeBuilder().build(*parent, cs);
+  ASSERT_EQ(r.children.size(), 1u);
+  EXPECT_EQ(r.fallbacks, 1);
+  EXPECT_NEAR(r.removed_volume, t * 2 * h.y * 2 * h.z, 1e-9 * parent->volume());
+  EXPECT_NEAR(r.children[0].shape->volume(), (2 * h.x - t) * 2 * h.y * 2 * h.z, 1e-9 * parent->volume());
+  EXPECT_NEAR(volume_sum(r) + r.removed_volume, parent->volume(), 1e-12 * parent->volume());
+  // A thicker slab (60 µm > 37 µm) stays a child.
+  cs.planes[0].offset = h.x - 60e-6;
+  const FragmentResult k = AlphaShapeBuilder().build(*parent, cs);
+  EXPECT_EQ(k.children.size(), 2u);
+  EXPECT_EQ(k.removed_volume, 0.0);
+  // Switched off: the 10 µm sliver is a child again.
+  AlphaShapeBuilderOptions o;
+  o.min_piece_thickness_fraction = 0;
+  cs.planes[0].offset = h.x - t;
+  EXPECT_EQ(AlphaShapeBuilder(o).build(*parent, cs).children.size(), 2u);
+}
+
+// A closed, manifold but self-intersecting parent mesh (two interpenetrating boxes in one
+// mesh) cannot be cut by CGAL: the builder cuts its convex hull instead and counts a
+// fallback, never an error that stops the run.
+TEST(AlphaShapeBuilder, SelfIntersectingParentFallsBackToItsHull) {
+  TriMesh m;
+  for (const Vec3 shift : {Vec3{-0.4e-3, 0, 0}, Vec3{0.4e-3, 0.1e-3, 0.05e-3}}) {
+    TriMesh b = Shape::box({0.6e-3, 0.5e-3, 0.5e-3})->mesh();
+    b.translate(shift);
+    const int base = static_cast<int>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (auto tr : b.triangles) m.triangles.push_back({tr[0] + base, tr[1] + base, tr[2] + base});
+  }
+  const auto parent = Shape::polyhedron(m);
+  ASSERT_THROW(split_by_planes(parent->mesh(), {{{1, 0, 0}, 0.0}}), std::invalid_argument);
+  CuttingSurfaces cs;
+  cs.planes.push_back({{1, 0, 0}, 0.0});
+  const FragmentResult r = AlphaShapeBuilder().build(*parent, cs);
+  EXPECT_EQ(r.method, "plane_cut_hull");
+  EXPECT_EQ(r.fallbacks, 1);
+  ASSERT_EQ(r.children.size(), 2u);
+  for (const auto& c : r.children) expect_valid_child(c);
+  EXPECT_EQ(r.removed_volume, 0.0);
+  EXPECT_NEAR(volume_sum(r), parent->volume(), 1e-12 * parent->volume());
+}
+
 // A non-convex parent: one plane through both arms of an L-prism gives three pieces.
 TEST(AlphaShapeBuilder, NonConvexParentSplitsIntoConnectedPieces) {
   // L-prism from three unit voxels (1 mm), surface triangulated voxel face by voxel face.

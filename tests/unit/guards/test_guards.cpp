@@ -97,6 +97,12 @@ TEST(Guards, DeepOverlapFailsAndNamesTheLimit) {
   EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");
   gs[1].origin = 6;
   EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");
+  // A grain below small_grain_fraction of the reference diameter is counted, not fatal.
+  GuardContext big = ctx();
+  big.reference_diameter = 5e-3;  // 0.25 × 5 mm = 1.25 mm > the 1 mm grain
+  GuardReading counted;
+  EXPECT_EQ(failure_of([&] { counted = check_invariants(GuardSettings{}, big, box(), 3, 0.01, gs, kMat, cs); }), "");
+  EXPECT_EQ(counted.small_grain_overlaps, 1);
   GuardSettings loose;
   loose.max_overlap_fraction = 0.65;
   EXPECT_EQ(failure_of([&] { check_invariants(loose, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");

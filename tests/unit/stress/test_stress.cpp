@@ -10,6 +10,7 @@
 
 #include "breakage/stress/StressModel.h"
 #include "core/Config.h"
+#include "geometry/level_set/LevelSetBuilder.h"
 
 using namespace crumble;
 using Json = nlohmann::json;
@@ -291,6 +292,67 @@ TEST(StressModel, SplitsASphereThroughItsLoadAxis) {
   EXPECT_NEAR(planes[0].offset, 0, 1e-12);
   EXPECT_EQ(m->figure_names(), (std::vector<std::string>{"sigma_1_Pa", "sigma_2_Pa", "sigma_3_Pa",
                                                           "equivalent_stress_Pa", "strength_Pa"}));
+}
+
+// The plane through three strongest contacts close together near the top of a sphere
+// (eqs. 19–20) would shave a cap of ~0.1 % of the grain; min_piece_fraction = 0.1 moves it
+// along its normal until the cap holds 10 % of the volume. Closed form: a cap of height
+// h·R holds h²(3 − h)/4 of the sphere, 0.1 at h = 0.3925, i.e. offset 0.6075 R.
+TEST(StressModel, ContactsNearOneSideStillSplitTheGrainInTwoMeaningfulPieces) {
+  const double R = 1e-3, f = 0.1;
+  double lo = 0, hi = 1;  // solve h²(3 − h)/4 = f by bisection
+  for (int i = 0; i < 60; ++i) ((0.5 * (lo + hi)) * (0.5 * (lo + hi)) * (3 - 0.5 * (lo + hi)) / 4 < f ? lo : hi) = 0.5 * (lo + hi);
+  const double offset_exact = R * (1 - lo);
+  ASSERT_NEAR(offset_exact / R, 0.6075, 1e-3);
+
+  auto m = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}}, 3);
+  EXPECT_DOUBLE_EQ(m->options().min_piece_fraction, f);  // the default
+  Grain g;
+  g.id = 3;
+  g.shape = Shape::sphere(R);
+  Rng rng(1);
+  m->assign_strength(g, Material{}, rng);
+  // Three partners pressing at points 0.1 R apart around the pole, one counter-force below.
+  const double zc = std::sqrt(R * R - 0.01 * R * R);
+  std::vector<Contact> cs{wall_contact(1, {0.1 * R, 0, zc}, {0, 0, -300}), wall_contact(2, {-0.05 * R, 0.0866 * R, zc}, {0, 0, -300}),
+                          wall_contact(3, {-0.05 * R, -0.0866 * R, zc}, {0, 0, -300}), wall_contact(0, {0, 0, -R}, {0, 0, 900})};
+  const auto a = m->analyse(g, Material{}, cs);
+  ASSERT_TRUE(a.broken);
+  const CutPlane p = std::get<CuttingSurfaces>(*a.fracture).planes.at(0);
+  EXPECT_NEAR(std::abs(p.normal.z), 1.0, 1e-9);  // orientation from the contacts (eq. 20)
+  // The lattice estimate (24³ cells over the bounds) is within 2 % of R of the closed form.
+  EXPECT_NEAR(std::abs(p.offset), offset_exact, 0.02 * R);
+  // Without the clamp: the paper's plane through the points, a sliver of 0.07 % of the grain.
+  auto raw = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"min_piece_fraction", 0.0}}, 3);
+  raw->assign_strength(g, Material{}, rng);
+  EXPECT_NEAR(std::abs(std::get<CuttingSurfaces>(*raw->analyse(g, Material{}, cs).fracture).planes.at(0).offset), zc, 1e-12);
+
+  // The level-set builder then makes two children, the smaller one >= the stated fraction
+  // (grid tolerance: 0.08 against 0.1).
+  const FragmentResult r = LevelSetBuilder().build(*g.shape, *a.fracture);
+  ASSERT_EQ(r.children.size(), 2u);
+  const double v0 = r.children[0].shape->volume(), v1 = r.children[1].shape->volume();
+  EXPECT_GE(std::min(v0, v1), 0.08 * g.shape->volume());
+  EXPECT_LE(std::min(v0, v1), 0.12 * g.shape->volume());
+
+  // 2D: two contacts close together on the rim of a disk; the chord is moved inwards too.
+  auto m2 = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}}, 2);
+  Grain d;
+  d.shape = Shape::disk(R);
+  m2->assign_strength(d, Material{}, rng);
+  const double s = std::sin(0.05), c = std::cos(0.05);
+  std::vector<Contact> c2{wall_contact(1, {R * s, R * c, 0}, {0, -400, 0}), wall_contact(2, {-R * s, R * c, 0}, {0, -400, 0}),
+                          wall_contact(0, {0, -R, 0}, {0, 800, 0})};
+  const auto a2 = m2->analyse(d, Material{}, c2);
+  ASSERT_TRUE(a2.broken);
+  const FragmentResult r2 = LevelSetBuilder().build(*d.shape, *a2.fracture);
+  ASSERT_EQ(r2.children.size(), 2u);
+  EXPECT_GE(std::min(r2.children[0].shape->volume(), r2.children[1].shape->volume()), 0.08 * d.shape->volume());
+
+  // Option range: a fraction of 0.5 or more is refused with its path.
+  nlohmann::json bad = {{"criterion", "von_mises"}, {"min_piece_fraction", 0.5}};
+  Config cb(bad);
+  EXPECT_THROW(make_stress(cb, EngineContext{}), ConfigError);
 }
 
 TEST(StressModel, SingleContactIn3DIsHeldOff) {

@@ -1,0 +1,833 @@
+// ODE adapter. Units: ODE sees lengths multiplied by `scale` (a grain ≈ 1 unit; ODE's and
+// libccd's tolerances are absolute lengths, METHODS.md §2), seconds and kilograms. Hence
+// internal velocity = scale·v, force = scale·F, inertia = scale²·I; every value leaves
+// through the same factors. With the automatic scale a power of two the conversions are
+// exact. Each body's origin is its centre of mass (dBodySetMass needs it there); the geometry
+// is the shape's convex hull in that frame.
+#include "backends/ode/OdeEngine.h"
+
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "core/Platen.h"
+#include "geometry/Format.h"
+#include "geometry/SymmetricEigen.h"
+
+// ode/precision.h picks dDOUBLE unless dIDESINGLE is set; the build states dIDEDOUBLE and
+// configure checks that ode.pc was built with dDOUBLE.
+#if !defined(dDOUBLE) || defined(dSINGLE)
+#error "crumble_ode must be compiled with ODE's double precision (dDOUBLE)"
+#endif
+static_assert(sizeof(dReal) == sizeof(double), "dReal must be double");
+
+namespace crumble {
+
+namespace {
+
+constexpr unsigned long kGrainBit = 1, kWallBit = 2, kPlatenBit = 4;
+
+void init_ode_for_this_thread() {
+  static std::once_flag once;
+  std::call_once(once, [] { dInitODE2(0); });
+  thread_local bool allocated = false;
+  if (!allocated) {
+    dAllocateODEDataForThread(dAllocateMaskAll);
+    allocated = true;
+  }
+}
+
+Vec3 vec(const dReal* p) { return {p[0], p[1], p[2]}; }
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// A convex polyhedron in ODE's format, in the body frame (centre of mass at the origin),
+// internal units. ODE keeps pointers to these arrays: the entry outlives its geoms.
+struct ConvexData {
+  std::vector<dReal> planes;        // a, b, c, d per face (outward normal, d = n·p)
+  std::vector<dReal> points;        // x, y, z per vertex
+  std::vector<unsigned> polygons;   // count, then the vertex indices (counter-clockwise seen from outside)
+  unsigned plane_count = 0, point_count = 0;
+};
+
+// Faces of a closed convex triangle mesh merged into polygons (coplanar triangles share a
+// face), so that ODE's convex colliders and our contact clipping see whole faces.
+void fill_convex(const TriMesh& hull, const Vec3& origin, double scale, ConvexData& out) {
+  const double size = std::max(norm(hull.bounds().size()), 1e-300);
+  struct Face {
+    Vec3 n;
+    double d;
+    std::vector<int> verts;
+  };
+  std::vector<Face> faces;
+  for (const auto& t : hull.triangles) {
+    const Vec3 a = hull.vertices[t[0]], b = hull.vertices[t[1]], c = hull.vertices[t[2]];
+    const Vec3 cr = cross(b - a, c - a);
+    if (!(norm(cr) > 0)) continue;
+    const Vec3 n = cr / norm(cr);
+    const double d = dot(n, a);
+    Face* f = nullptr;
+    for (auto& g : faces)
+      if (dot(g.n, n) > 1 - 1e-9 && std::abs(g.d - d) < 1e-9 * size) f = &g;
+    if (!f) {
+      faces.push_back({n, d, {}});
+      f = &faces.back();
+    }
+    for (int k : t)
+      if (std::find(f->verts.begin(), f->verts.end(), k) == f->verts.end()) f->verts.push_back(k);
+  }
+  for (const auto& v : hull.vertices) {
+    const Vec3 p = (v - origin) * scale;
+    out.points.insert(out.points.end(), {p.x, p.y, p.z});
+  }
+  out.point_count = static_cast<unsigned>(hull.vertices.size());
+  for (auto& f : faces) {
+    Vec3 c;
+    for (int k : f.verts) c = c + hull.vertices[k];
+    c = c / static_cast<double>(f.verts.size());
+    const Vec3 e1 = normalized(hull.vertices[f.verts[0]] - c);
+    const Vec3 e2 = cross(f.n, e1);
+    std::vector<std::pair<double, int>> order;
+    for (int k : f.verts) {
+      const Vec3 r = hull.vertices[k] - c;
+      order.push_back({std::atan2(dot(r, e2), dot(r, e1)), k});
+    }
+    std::sort(order.begin(), order.end());
+    out.polygons.push_back(static_cast<unsigned>(order.size()));
+    for (const auto& [ang, k] : order) out.polygons.push_back(static_cast<unsigned>(k));
+    const double d = (f.d - dot(f.n, origin)) * scale;
+    out.planes.insert(out.planes.end(), {f.n.x, f.n.y, f.n.z, d});
+  }
+  out.plane_count = static_cast<unsigned>(faces.size());
+}
+
+// ODE data shared by every grain of one Shape.
+struct ShapeEntry {
+  Shape::Ptr shape;
+  Vec3 centroid;        // shape frame, SI
+  Mat3 inertia;         // about the centroid, per unit density, SI (m⁵)
+  bool sphere = false;  // exact dSphere
+  double radius = 0;    // internal, exact sphere
+  double size = 0;      // equivalent diameter, internal
+  ConvexData convex;
+};
+
+// What the near callback and the force read-out need to know about a geom.
+struct GeomTag {
+  GrainId id = -1;  // grain id, -1 for walls and the platen
+  int wall = -1;    // WallId for walls and the platen
+  int material = 0;
+  double size = 1;  // internal, for the contact tolerance
+  const ConvexData* convex = nullptr;  // dConvex geoms (grains and the platen)
+};
+
+struct GrainBody {
+  GeomTag tag;
+  std::shared_ptr<ShapeEntry> entry;
+  dBodyID body = nullptr;
+  dGeomID geom = nullptr;
+  double mass = 0;  // kg, physical
+};
+
+// One contact point of the last step: geom 1 is always a grain (`a_id`), the normal points
+// into it (ODE's convention) and the joint force on it is fb.f1.
+struct PointRec {
+  dContact contact;
+  GrainId a_id = -1, b_id = -1;
+  int wall = -1;
+  bool live = true;
+  dJointFeedback fb;
+};
+
+void require_finite(const Vec3& v, const char* what, GrainId id) {
+  if (!is_finite(v)) throw std::invalid_argument("ode: grain " + std::to_string(id) + " has a non-finite " + what);
+}
+
+// World-frame planes and vertices of a convex geom.
+struct WorldConvex {
+  std::vector<Vec3> pts;
+  std::vector<Vec3> n;
+  std::vector<double> d;
+};
+
+WorldConvex world_convex(dGeomID g, const ConvexData& c) {
+  const dReal* p = dGeomGetPosition(g);
+  const dReal* R = dGeomGetRotation(g);  // 3x4, row-major
+  auto rot = [R](double x, double y, double z) {
+    return Vec3{R[0] * x + R[1] * y + R[2] * z, R[4] * x + R[5] * y + R[6] * z, R[8] * x + R[9] * y + R[10] * z};
+  };
+  const Vec3 pos = vec(p);
+  WorldConvex w;
+  for (unsigned i = 0; i < c.point_count; ++i)
+    w.pts.push_back(pos + rot(c.points[3 * i], c.points[3 * i + 1], c.points[3 * i + 2]));
+  for (unsigned i = 0; i < c.plane_count; ++i) {
+    const Vec3 n = rot(c.planes[4 * i], c.planes[4 * i + 1], c.planes[4 * i + 2]);
+    w.n.push_back(n);
+    w.d.push_back(c.planes[4 * i + 3] + dot(n, pos));
+  }
+  return w;
+}
+
+// 2D convex hull (Andrew's monotone chain), counter-clockwise, collinear points dropped.
+using P2 = std::array<double, 2>;
+double cross2(const P2& o, const P2& a, const P2& b) { return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]); }
+std::vector<P2> hull2(std::vector<P2> p, double eps) {
+  std::sort(p.begin(), p.end());
+  p.erase(std::unique(p.begin(), p.end(),
+                      [eps](const P2& a, const P2& b) { return std::abs(a[0] - b[0]) <= eps && std::abs(a[1] - b[1]) <= eps; }),
+          p.end());
+  if (p.size() < 3) return p;
+  std::vector<P2> h(2 * p.size());
+  std::size_t k = 0;
+  const double area_eps = eps * eps;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross2(h[k - 2], h[k - 1], p[i]) <= area_eps) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross2(h[k - 2], h[k - 1], p[i]) <= area_eps) --k;
+    h[k++] = p[i];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+// Sutherland–Hodgman: the part of `subject` (polygon or segment) inside the convex CCW `clip`.
+std::vector<P2> clip_polygon(std::vector<P2> subject, const std::vector<P2>& clip) {
+  for (std::size_t e = 0; e < clip.size() && !subject.empty(); ++e) {
+    const P2 a = clip[e], b = clip[(e + 1) % clip.size()];
+    std::vector<P2> out;
+    const std::size_t n = subject.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const P2 p = subject[i], q = subject[(i + 1) % n];
+      const double sp = cross2(a, b, p), sq = cross2(a, b, q);
+      if (sp >= 0) out.push_back(p);
+      if ((sp >= 0) != (sq >= 0)) {
+        const double t = sp / (sp - sq);
+        out.push_back({p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])});
+      }
+    }
+    subject = std::move(out);
+  }
+  return subject;
+}
+
+}  // namespace
+
+struct OdeEngine::Impl {
+  Options opt;
+  EngineContext ctx;
+
+  dWorldID world = nullptr;
+  dSpaceID space = nullptr;
+  dJointGroupID contact_group = nullptr;
+
+  double scale = 0;  // internal units per metre; 0 until fixed
+  double ref_length = 1;
+
+  bool have_container = false;
+  Container container;
+  std::vector<dGeomID> walls;
+  std::vector<GeomTag> wall_tags;  // one per wall (reserved: geoms point into it)
+  GeomTag platen_tag;
+  ConvexData platen_convex;
+  dBodyID platen_body = nullptr;
+  dGeomID platen_geom = nullptr;
+  dJointID platen_slider = nullptr;
+  double platen_half_thickness = 0;  // internal
+  PlatenDriver driver;
+  bool platen_dynamic = false;
+
+  std::map<GrainId, std::unique_ptr<GrainBody>> grains;
+  std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
+  double total_mass = 0;  // kg, physical
+  double last_dt = 0;
+  std::uint64_t step_count = 0;
+  std::vector<PointRec> recs;
+
+  Impl(const Options& o, const EngineContext& c) : opt(o), ctx(c) {
+    init_ode_for_this_thread();
+    std::string why;
+    if (!ode_double_precision_ok(&why)) throw std::runtime_error("ode: " + why);
+    world = dWorldCreate();
+    space = dHashSpaceCreate(nullptr);
+    contact_group = dJointGroupCreate(0);
+    dWorldSetQuickStepNumIterations(world, opt.solver_iterations);
+    dWorldSetQuickStepW(world, opt.sor_w);
+    dWorldSetAutoDisableFlag(world, 0);
+    dWorldSetContactSurfaceLayer(world, 0);
+    wall_tags.reserve(8);
+  }
+
+  ~Impl() {
+    dJointGroupDestroy(contact_group);
+    for (auto& [id, g] : grains) {
+      dGeomDestroy(g->geom);
+      dBodyDestroy(g->body);
+    }
+    remove_container_bodies();
+    dSpaceDestroy(space);
+    dWorldDestroy(world);
+  }
+
+  // ---------------------------------------------------------------- units
+  double to_int(double si_length) const { return si_length * scale; }
+
+  void fix_scale(double first_diameter) {
+    if (scale > 0) return;
+    if (opt.length_scale > 0) {
+      scale = opt.length_scale;
+    } else if (first_diameter > 0) {
+      scale = std::exp2(std::round(std::log2(1.0 / first_diameter)));
+    } else {
+      scale = 1;
+    }
+    ref_length = first_diameter > 0 ? first_diameter * scale : 1.0;
+    // Mass scaling slows the dynamics; the weight stays m·g (the platen has no gravity).
+    const Vec3 g = ctx.gravity * (scale / opt.mass_scale);
+    dWorldSetGravity(world, g.x, g.y, g.z);
+    dWorldSetContactMaxCorrectingVel(world, opt.max_correcting_velocity > 0 ? opt.max_correcting_velocity * scale
+                                                                             : dInfinity);
+    if (have_container) build_container();
+  }
+
+  // ---------------------------------------------------------------- container
+  void remove_container_bodies() {
+    for (dGeomID w : walls) dGeomDestroy(w);
+    walls.clear();
+    wall_tags.clear();
+    if (platen_slider) dJointDestroy(platen_slider);
+    if (platen_geom) dGeomDestroy(platen_geom);
+    if (platen_body) dBodyDestroy(platen_body);
+    platen_slider = nullptr;
+    platen_geom = nullptr;
+    platen_body = nullptr;
+  }
+
+  void build_container() {
+    remove_container_bodies();
+    for (const WallPlane& w : container_planes(container, 3)) {
+      if (w.id == kPlaten) continue;
+      dGeomID g = dCreatePlane(space, w.normal.x, w.normal.y, w.normal.z, to_int(w.offset()));
+      GeomTag t;
+      t.wall = w.id;
+      wall_tags.push_back(t);
+      dGeomSetData(g, &wall_tags.back());
+      dGeomSetCategoryBits(g, kWallBit);
+      dGeomSetCollideBits(g, kGrainBit);
+      walls.push_back(g);
+    }
+    // Platen: a thick box a little wider than the container (it only meets grains), bottom
+    // face at the driver's position; a dConvex so flat faces on it get several points.
+    const double lx = to_int(container.lx), ly = to_int(container.ly);
+    platen_half_thickness = 0.25 * std::max(lx, ly);
+    const double hx = 0.55 * lx, hy = 0.55 * ly, hz = platen_half_thickness;
+    platen_convex = ConvexData{};
+    TriMesh box;
+    for (int k = 0; k < 8; ++k) box.vertices.push_back({(k & 1) ? hx : -hx, (k & 2) ? hy : -hy, (k & 4) ? hz : -hz});
+    box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                     {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+    fill_convex(box, {}, 1.0, platen_convex);
+    platen_body = dBodyCreate(world);
+    platen_geom = dCreateConvex(space, platen_convex.planes.data(), platen_convex.plane_count,
+                                platen_convex.points.data(), platen_convex.point_count, platen_convex.polygons.data());
+    dGeomSetBody(platen_geom, platen_body);
+    platen_tag = GeomTag{};
+    platen_tag.wall = kPlaten;
+    platen_tag.size = 2 * hz;
+    platen_tag.convex = &platen_convex;
+    dGeomSetData(platen_geom, &platen_tag);
+    dGeomSetCategoryBits(platen_geom, kPlatenBit);
+    dGeomSetCollideBits(platen_geom, kGrainBit);
+    dBodySetPosition(platen_body, 0.5 * lx, 0.5 * ly, to_int(driver.position()) + hz);
+    dBodySetGravityMode(platen_body, 0);
+    platen_slider = dJointCreateSlider(world, nullptr);
+    dJointAttach(platen_slider, platen_body, nullptr);
+    dJointSetSliderAxis(platen_slider, 0, 0, 1);
+    configure_platen_body();
+  }
+
+  double platen_mass_internal() const {
+    return std::max(crumble::platen_mass(container, total_mass), 1e-30) * opt.mass_scale;
+  }
+
+  void set_platen_mass() {
+    dMass m;
+    dMassSetZero(&m);
+    const double M = platen_mass_internal();
+    // A box-like inertia; rotation is held by the slider anyway.
+    const double I = M * platen_half_thickness * platen_half_thickness;
+    dMassSetParameters(&m, M, 0, 0, 0, I, I, I, 0, 0, 0);
+    dBodySetMass(platen_body, &m);
+  }
+
+  // Kinematic body for velocity control; dynamic body on a slider along z for force control.
+  void configure_platen_body() {
+    const bool dynamic = driver.force_driven();
+    const double vz = dBodyGetLinearVel(platen_body)[2];
+    if (dynamic) {
+      dBodySetDynamic(platen_body);
+      set_platen_mass();
+      dJointEnable(platen_slider);
+      dBodySetLinearVel(platen_body, 0, 0, vz);
+    } else {
+      dJointDisable(platen_slider);
+      dBodySetKinematic(platen_body);
+      dBodySetLinearVel(platen_body, 0, 0, 0);
+    }
+    dBodySetAngularVel(platen_body, 0, 0, 0);
+    platen_dynamic = dynamic;
+  }
+
+  double current_platen_z() const {
+    if (!platen_body || !platen_dynamic) return driver.position();
+    return (dBodyGetPosition(platen_body)[2] - platen_half_thickness) / scale;
+  }
+
+  // ---------------------------------------------------------------- grains
+  std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
+    auto it = shape_cache.find(shape.get());
+    if (it != shape_cache.end())
+      if (auto e = it->second.lock()) return e;
+    for (auto i = shape_cache.begin(); i != shape_cache.end();)
+      i = i->second.expired() ? shape_cache.erase(i) : std::next(i);
+    auto e = std::make_shared<ShapeEntry>();
+    e->shape = shape;
+    const MassProperties& mp = shape->mass_properties();
+    if (!(mp.volume > 0)) throw std::invalid_argument("ode: shape " + shape->describe() + " has no volume");
+    e->centroid = mp.centroid;
+    e->inertia = mp.inertia;
+    const auto pa = principal_axes(mp.inertia);
+    if (!(pa.moments.x > 0 && pa.moments.y > 0 && pa.moments.z > 0))
+      throw std::invalid_argument("ode: shape " + shape->describe() + " has a non-positive principal moment");
+    e->size = shape->equivalent_diameter() * scale;
+    if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
+      e->sphere = true;
+      e->radius = shape->parameters().at(0) * scale;
+    } else {
+      fill_convex(shape->convex_hull(), e->centroid, scale, e->convex);
+    }
+    shape_cache[shape.get()] = e;
+    return e;
+  }
+
+  void add_grain(const Grain& g) {
+    if (!g.shape) throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has no shape");
+    if (g.shape->dimension() != 3)
+      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has a 2D shape; the engine is 3D");
+    if (g.material < 0 || g.material >= static_cast<int>(ctx.materials.size()))
+      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has material index " +
+                                  std::to_string(g.material) + " out of range");
+    if (grains.count(g.id)) throw std::invalid_argument("ode: grain id " + std::to_string(g.id) + " added twice");
+    require_finite(g.position, "position", g.id);
+    require_finite(g.velocity, "velocity", g.id);
+    require_finite(g.angular_velocity, "angular velocity", g.id);
+    const double qn = std::sqrt(g.orientation.w * g.orientation.w + g.orientation.x * g.orientation.x +
+                                g.orientation.y * g.orientation.y + g.orientation.z * g.orientation.z);
+    if (!(qn > 0) || !std::isfinite(qn))
+      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has an invalid orientation");
+    init_ode_for_this_thread();
+    fix_scale(g.shape->equivalent_diameter());
+
+    const Material& mat = ctx.materials[g.material];
+    auto gb = std::make_unique<GrainBody>();
+    gb->entry = shape_entry(g.shape);
+    const ShapeEntry& e = *gb->entry;
+    gb->mass = mat.density * g.shape->volume();
+    gb->tag.id = g.id;
+    gb->tag.material = g.material;
+    gb->tag.size = e.size;
+    gb->body = dBodyCreate(world);
+    dMass m;
+    dMassSetZero(&m);
+    const Mat3 I = e.inertia * (mat.density * opt.mass_scale * scale * scale);
+    dMassSetParameters(&m, gb->mass * opt.mass_scale, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
+    dBodySetMass(gb->body, &m);
+    if (e.sphere) {
+      gb->geom = dCreateSphere(space, e.radius);
+    } else {
+      gb->geom = dCreateConvex(space, e.convex.planes.data(), e.convex.plane_count, e.convex.points.data(),
+                               e.convex.point_count, e.convex.polygons.data());
+      gb->tag.convex = &e.convex;
+    }
+    dGeomSetBody(gb->geom, gb->body);
+    dGeomSetData(gb->geom, &gb->tag);
+    dGeomSetCategoryBits(gb->geom, kGrainBit);
+    dGeomSetCollideBits(gb->geom, kGrainBit | kWallBit | kPlatenBit);
+    const Quat q = g.orientation.normalized();
+    const Vec3 arm = q.rotate(e.centroid);
+    const Vec3 com = (g.position + arm) * scale;
+    dBodySetPosition(gb->body, com.x, com.y, com.z);
+    const dQuaternion dq = {q.w, q.x, q.y, q.z};
+    dBodySetQuaternion(gb->body, dq);
+    const Vec3 v = (g.velocity + cross(g.angular_velocity, arm)) * scale;
+    dBodySetLinearVel(gb->body, v.x, v.y, v.z);
+    dBodySetAngularVel(gb->body, g.angular_velocity.x, g.angular_velocity.y, g.angular_velocity.z);
+    total_mass += gb->mass;
+    grains.emplace(g.id, std::move(gb));
+    if (platen_body && platen_dynamic && container.platen_mass <= 0) set_platen_mass();
+  }
+
+  void remove_grain(GrainId id) {
+    auto it = grains.find(id);
+    if (it == grains.end()) throw std::invalid_argument("ode: remove_grain: unknown grain id " + std::to_string(id));
+    // Its contact joints go to limbo with the body; their records no longer count.
+    for (auto& r : recs)
+      if (r.a_id == id || r.b_id == id) r.live = false;
+    dGeomDestroy(it->second->geom);
+    dBodyDestroy(it->second->body);
+    total_mass -= it->second->mass;
+    grains.erase(it);
+    if (grains.empty()) total_mass = 0;
+    if (platen_body && platen_dynamic && container.platen_mass <= 0) set_platen_mass();
+  }
+
+  // ---------------------------------------------------------------- contacts
+  dSurfaceParameters surface(const GeomTag& a, const GeomTag* b_grain) const {
+    const Material& ma = ctx.materials[a.material];
+    dSurfaceParameters s{};
+    double mu = 0, rho = 0;
+    if (!b_grain) {
+      mu = ma.wall_friction;
+      rho = ma.rolling_friction;
+    } else {
+      const Material& mb = ctx.materials[b_grain->material];
+      mu = a.material == b_grain->material ? ma.friction : std::sqrt(ma.friction * mb.friction);
+      rho = a.material == b_grain->material ? ma.rolling_friction : std::sqrt(ma.rolling_friction * mb.rolling_friction);
+    }
+    // dContactApprox1: friction (and rolling) limits proportional to the normal force, so
+    // μ is a Coulomb coefficient (otherwise ODE reads it as a force bound).
+    s.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactMu2;
+    s.mu = mu;
+    s.mu2 = mu;
+    if (rho > 0) {
+      // Rolling resistance: a lever arm rho in the internal length unit (Bullet convention).
+      s.mode |= dContactRolling;
+      s.rho = rho;
+      s.rho2 = rho;
+      s.rhoN = 0;
+    }
+    s.soft_erp = opt.erp;
+    s.soft_cfm = opt.cfm;
+    return s;
+  }
+
+  // Several points for two polyhedra touching face to face: libccd gives one contact (its
+  // normal n and depth); the faces of each hull within a tolerance of the contact plane are
+  // projected on it and clipped against each other, and each corner of the overlap becomes a
+  // point with the exact gap between the two hulls along n there (points with a gap are
+  // dropped). Falls back to the libccd point when the overlap is a point or an edge crossing.
+  int manifold(dGeomID g1, dGeomID g2, const GeomTag& t1, const GeomTag& t2, const dContactGeom& c0,
+               dContactGeom* out, int max_points) const {
+    const Vec3 n = normalized(vec(c0.normal));  // points into g1, from g2 towards g1
+    const WorldConvex w1 = world_convex(g1, *t1.convex), w2 = world_convex(g2, *t2.convex);
+    const double L = std::min(t1.size, t2.size);
+    const double tol = 0.02 * L;
+    double s1 = std::numeric_limits<double>::infinity(), s2 = -s1;
+    for (const auto& p : w1.pts) s1 = std::min(s1, dot(n, p));
+    for (const auto& p : w2.pts) s2 = std::max(s2, dot(n, p));
+    const Vec3 u = normalized(std::abs(n.x) < 0.6 ? cross(n, Vec3{1, 0, 0}) : cross(n, Vec3{0, 1, 0}));
+    const Vec3 v = cross(n, u);
+    std::vector<P2> f1, f2;
+    for (const auto& p : w1.pts)
+      if (dot(n, p) <= s1 + tol) f1.push_back({dot(u, p), dot(v, p)});
+    for (const auto& p : w2.pts)
+      if (dot(n, p) >= s2 - tol) f2.push_back({dot(u, p), dot(v, p)});
+    if (f1.size() < 2 || f2.size() < 2) return 0;
+    const double eps = 1e-9 * L;
+    std::vector<P2> h1 = hull2(f1, eps), h2 = hull2(f2, eps);
+    std::vector<P2> region;
+    if (h2.size() >= 3) {
+      region = clip_polygon(h1, h2);
+    } else if (h1.size() >= 3) {
+      region = clip_polygon(h2, h1);
+    } else {
+      return 0;  // edge across edge: one point
+    }
+    region = hull2(region, 1e-6 * L);
+    if (region.size() < 2) return 0;
+    // At most max_points corners: farthest-point sampling from the first corner.
+    std::vector<P2> pick;
+    if (static_cast<int>(region.size()) <= max_points) {
+      pick = region;
+    } else {
+      std::vector<double> dmin(region.size(), std::numeric_limits<double>::infinity());
+      std::size_t next = 0;
+      for (int k = 0; k < max_points; ++k) {
+        pick.push_back(region[next]);
+        std::size_t best = 0;
+        double bd = -1;
+        for (std::size_t i = 0; i < region.size(); ++i) {
+          const double dx = region[i][0] - region[next][0], dy = region[i][1] - region[next][1];
+          dmin[i] = std::min(dmin[i], dx * dx + dy * dy);
+          if (dmin[i] > bd) {
+            bd = dmin[i];
+            best = i;
+          }
+        }
+        next = best;
+      }
+    }
+    int count = 0;
+    for (const auto& r : pick) {
+      const Vec3 x0 = u * r[0] + v * r[1];  // on the line x0 + t·n
+      // g1's surface facing g2 (its lower side along n) and g2's upper side.
+      double t1lo = -std::numeric_limits<double>::infinity(), t2hi = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < w1.n.size(); ++k) {
+        const double nn = dot(w1.n[k], n);
+        if (nn < -1e-12) t1lo = std::max(t1lo, (w1.d[k] - dot(w1.n[k], x0)) / nn);
+      }
+      for (std::size_t k = 0; k < w2.n.size(); ++k) {
+        const double nn = dot(w2.n[k], n);
+        if (nn > 1e-12) t2hi = std::min(t2hi, (w2.d[k] - dot(w2.n[k], x0)) / nn);
+      }
+      const double depth = t2hi - t1lo;
+      if (!std::isfinite(depth) || depth < 0) continue;
+      dContactGeom& o = out[count++];
+      o = c0;
+      const Vec3 p = x0 + n * (0.5 * (t1lo + t2hi));
+      o.pos[0] = p.x;
+      o.pos[1] = p.y;
+      o.pos[2] = p.z;
+      o.depth = depth;
+    }
+    return count >= 2 ? count : 0;
+  }
+
+  static void near_callback(void* data, dGeomID o1, dGeomID o2) { static_cast<Impl*>(data)->near(o1, o2); }
+
+  void near(dGeomID o1, dGeomID o2) {
+    const auto* t1 = static_cast<const GeomTag*>(dGeomGetData(o1));
+    const auto* t2 = static_cast<const GeomTag*>(dGeomGetData(o2));
+    if (!t1 || !t2) return;
+    if (t1->id < 0 && t2->id < 0) return;
+    if (t1->id < 0) {  // the grain first: the normal points into it and f1 is the force on it
+      std::swap(o1, o2);
+      std::swap(t1, t2);
+    }
+    constexpr int kMax = 16;
+    std::array<dContactGeom, kMax> cg{};
+    const int max_pts = opt.contacts_per_pair;
+    int n = dCollide(o1, o2, max_pts, cg.data(), sizeof(dContactGeom));
+    if (n <= 0) return;
+    if (n == 1 && max_pts > 1 && t1->convex && t2->convex) {
+      std::array<dContactGeom, kMax> more{};
+      const int m = manifold(o1, o2, *t1, *t2, cg[0], more.data(), max_pts);
+      if (m >= 2) {
+        cg = more;
+        n = m;
+      }
+    }
+    const GeomTag* partner_grain = t2->id >= 0 ? t2 : nullptr;
+    const dSurfaceParameters s = surface(*t1, partner_grain);
+    for (int k = 0; k < n; ++k) {
+      PointRec r;
+      r.contact.surface = s;
+      r.contact.geom = cg[k];
+      r.contact.geom.g1 = o1;
+      r.contact.geom.g2 = o2;
+      r.a_id = t1->id;
+      r.b_id = t2->id;
+      r.wall = t2->id >= 0 ? -1 : t2->wall;
+      recs.push_back(r);
+    }
+  }
+
+  // ---------------------------------------------------------------- stepping
+  void step(double dt) {
+    if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("ode: step needs a finite dt > 0");
+    if (scale <= 0) fix_scale(0);
+    if (!have_container) throw std::logic_error("ode: step() before set_container()");
+    init_ode_for_this_thread();
+    dJointGroupEmpty(contact_group);
+    recs.clear();
+    if (platen_dynamic) {
+      dBodyAddForce(platen_body, 0, 0, driver.applied_force() * scale);
+    } else {
+      // Kinematic: starts the step where the driver has it, moving at the command.
+      const dReal* p = dBodyGetPosition(platen_body);
+      dBodySetPosition(platen_body, p[0], p[1], to_int(driver.position()) + platen_half_thickness);
+      dBodySetLinearVel(platen_body, 0, 0, driver.command().value * scale);
+    }
+    dSpaceCollide(space, this, &Impl::near_callback);
+    for (auto& r : recs) {
+      dJointID j = dJointCreateContact(world, contact_group, &r.contact);
+      dBodyID b1 = dGeomGetBody(r.contact.geom.g1), b2 = dGeomGetBody(r.contact.geom.g2);
+      dJointAttach(j, b1, b2);
+      dJointSetFeedback(j, &r.fb);
+    }
+    // QuickStep reorders constraints with ODE's global generator: reseed it so a run
+    // depends only on the scenario seed and the step.
+    dRandSetSeed(static_cast<unsigned long>(splitmix64(ctx.seed ^ splitmix64(step_count))));
+    dWorldQuickStep(world, dt);
+    last_dt = dt;
+    ++step_count;
+    if (platen_dynamic) {
+      driver.sync(current_platen_z(), dBodyGetLinearVel(platen_body)[2] / scale);
+    } else {
+      driver.advance(dt, 0, 0);
+      const dReal* p = dBodyGetPosition(platen_body);
+      dBodySetPosition(platen_body, p[0], p[1], to_int(driver.position()) + platen_half_thickness);
+    }
+  }
+
+  // Force (SI) on grain a of record r, and the sum of the platen's / floor's vertical forces.
+  Vec3 force_si(const PointRec& r) const { return vec(r.fb.f1) / scale; }
+
+  double wall_force_z(int wall) const {
+    double fz = 0;
+    for (const auto& r : recs)
+      if (r.live && r.wall == wall) fz += r.fb.f1[2];
+    return fz / scale;
+  }
+
+  std::vector<Contact> contacts() const {
+    std::vector<Contact> out;
+    // Points of one pair are consecutive (one dCollide call each).
+    for (std::size_t i = 0; i < recs.size();) {
+      std::size_t j = i;
+      while (j < recs.size() && recs[j].contact.geom.g1 == recs[i].contact.geom.g1 &&
+             recs[j].contact.geom.g2 == recs[i].contact.geom.g2)
+        ++j;
+      if (!recs[i].live) {
+        i = j;
+        continue;
+      }
+      Vec3 f, point, normal;
+      double fn_sum = 0, depth = 0;
+      for (std::size_t k = i; k < j; ++k) {
+        const PointRec& r = recs[k];
+        const Vec3 fk = vec(r.fb.f1);
+        const Vec3 nk = vec(r.contact.geom.normal);
+        const double fn = std::max(dot(fk, nk), 0.0);
+        f = f + fk;
+        point = point + vec(r.contact.geom.pos) * fn;
+        normal = normal + nk * fn;
+        fn_sum += fn;
+        depth = std::max(depth, static_cast<double>(r.contact.geom.depth));
+      }
+      const PointRec& r0 = recs[i];
+      i = j;
+      if (!(fn_sum > 0)) continue;  // touching without force: not an active contact
+      Contact c;
+      bool flip = false;
+      c.a = r0.a_id;
+      if (r0.b_id >= 0) {
+        flip = r0.b_id < r0.a_id;  // grain pair once, `a` the smaller id
+        c.a = flip ? r0.b_id : r0.a_id;
+        c.b = flip ? r0.a_id : r0.b_id;
+      } else {
+        c.wall = r0.wall;
+      }
+      const double sgn = flip ? -1.0 : 1.0;
+      c.force = f * (sgn / scale);
+      c.normal = normalized(normal) * sgn;
+      c.point = point / (fn_sum * scale);
+      c.overlap = depth / scale;
+      out.push_back(c);
+    }
+    return out;
+  }
+
+  void read_state(std::span<Grain> gs) const {
+    for (auto& g : gs) {
+      auto it = grains.find(g.id);
+      if (it == grains.end()) continue;
+      const GrainBody& gb = *it->second;
+      const dReal* q = dBodyGetQuaternion(gb.body);
+      const Quat qq = Quat{q[0], q[1], q[2], q[3]}.normalized();
+      const Vec3 com = vec(dBodyGetPosition(gb.body)) / scale;
+      const Vec3 arm = qq.rotate(gb.entry->centroid);
+      const Vec3 w = vec(dBodyGetAngularVel(gb.body));
+      g.orientation = qq;
+      g.position = com - arm;
+      g.angular_velocity = w;
+      g.velocity = vec(dBodyGetLinearVel(gb.body)) / scale - cross(w, arm);
+    }
+  }
+
+  void set_container(const Container& c) {
+    if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
+        !std::isfinite(c.height))
+      throw std::invalid_argument("ode: container needs finite lx, ly, height > 0");
+    if (!(c.platen_mass >= 0)) throw std::invalid_argument("ode: container platen_mass must be >= 0");
+    container = c;
+    have_container = true;
+    driver.reset(c.height);
+    if (scale > 0) build_container();
+  }
+
+  void set_platen(const PlatenCommand& cmd) {
+    if (!std::isfinite(cmd.value)) throw std::invalid_argument("ode: platen command value is not finite");
+    const bool mode_change = cmd.mode != driver.command().mode;
+    driver.set_command(cmd);
+    if (platen_body && mode_change) configure_platen_body();
+  }
+};
+
+// ------------------------------------------------------------------ OdeEngine
+
+OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
+  cfg.string("type", "ode");
+  Options o;
+  o.exact_spheres = cfg.choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"}) == "sphere";
+  o.length_scale = cfg.number("length_scale", 0, 0);
+  o.solver_iterations = static_cast<int>(cfg.integer("solver_iterations", 100, 1, 1000000));
+  o.sor_w = cfg.positive("sor_w", 1.0);
+  if (o.sor_w >= 2) cfg.fail("sor_w", "expected a number in (0, 2), got " + fmt_num(o.sor_w));
+  o.erp = cfg.number("erp", 0.003, 0, 1);
+  o.cfm = cfg.number("cfm", 1e-9, 0);
+  o.max_correcting_velocity = cfg.number("max_correcting_velocity", 0, 0);
+  o.contacts_per_pair = static_cast<int>(cfg.integer("contacts_per_pair", 4, 1, 16));
+  o.mass_scale = cfg.positive("mass_scale", 1);
+  return o;
+}
+
+OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : impl_(std::make_unique<Impl>(opts, ctx)) {}
+OdeEngine::~OdeEngine() = default;
+
+void OdeEngine::set_container(const Container& c) { impl_->set_container(c); }
+void OdeEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
+void OdeEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
+std::size_t OdeEngine::grain_count() const { return impl_->grains.size(); }
+void OdeEngine::step(double dt) { impl_->step(dt); }
+void OdeEngine::read_state(std::span<Grain> grains) const { impl_->read_state(grains); }
+std::vector<Contact> OdeEngine::contacts() const { return impl_->contacts(); }
+void OdeEngine::set_platen(const PlatenCommand& cmd) { impl_->set_platen(cmd); }
+double OdeEngine::platen_position() const { return impl_->current_platen_z(); }
+double OdeEngine::platen_force() const { return -impl_->wall_force_z(kPlaten); }  // up on the platen
+double OdeEngine::floor_force() const { return impl_->wall_force_z(kFloor); }     // grains push it down
+double OdeEngine::length_scale() const { return impl_->scale; }
+
+std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx) {
+  const auto opts = OdeEngine::read_options(cfg);
+  if (ctx.dimension != 3) cfg.fail("", "the ode engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
+  return std::make_unique<OdeEngine>(opts, ctx);
+}
+
+bool ode_double_precision_ok(std::string* why) {
+  if (sizeof(dReal) != sizeof(double)) {
+    if (why) *why = "dReal is not double in crumble_ode";
+    return false;
+  }
+  init_ode_for_this_thread();
+  if (!dCheckConfiguration("ODE_double_precision")) {
+    if (why) *why = "the linked libode is not the double-precision build";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace crumble

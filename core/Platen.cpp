@@ -1,0 +1,51 @@
+#include "core/Platen.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace crumble {
+
+std::vector<WallPlane> container_planes(const Container& c, int dimension, double platen_position,
+                                        double platen_velocity) {
+  std::vector<WallPlane> w;
+  Vec3 e_up, e_x{1, 0, 0}, e_y{0, 1, 0};
+  e_up[dimension == 3 ? 2 : 1] = 1;
+  w.push_back({kFloor, {}, e_up, {}});
+  if (c.height > 0) w.push_back({kPlaten, e_up * platen_position, -e_up, e_up * platen_velocity});
+  if (c.lx > 0) {
+    w.push_back({kWallXMin, {}, e_x, {}});
+    w.push_back({kWallXMax, e_x * c.lx, -e_x, {}});
+  }
+  if (dimension == 3 && c.ly > 0) {
+    w.push_back({kWallYMin, {}, e_y, {}});
+    w.push_back({kWallYMax, e_y * c.ly, -e_y, {}});
+  }
+  return w;
+}
+
+double platen_mass(const Container& c, double grains_mass, double mass_scale) {
+  return (c.platen_mass > 0 ? c.platen_mass : grains_mass) * mass_scale;
+}
+
+void PlatenDriver::reset(double position) {
+  z_ = position;
+  v_ = 0;
+}
+
+void PlatenDriver::set_command(const PlatenCommand& cmd) {
+  if (!std::isfinite(cmd.value)) throw std::invalid_argument("platen command value is not finite");
+  cmd_ = cmd;
+}
+
+void PlatenDriver::advance(double dt, double grain_force, double mass, double damping) {
+  if (cmd_.mode == PlatenCommand::Mode::Velocity) {
+    v_ = cmd_.value;
+  } else if (mass > 0) {
+    // Grains push it up with grain_force, the command pushes it down.
+    const double acc = (grain_force - cmd_.value) / mass - damping * v_;
+    v_ += acc * dt;
+  }
+  z_ += v_ * dt;
+}
+
+}  // namespace crumble
