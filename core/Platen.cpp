@@ -48,4 +48,14 @@ void PlatenDriver::advance(double dt, double grain_force, double mass, double da
   z_ += v_ * dt;
 }
 
+void require_closed_box(const Container& c, const std::string& engine) {
+  if (c.open)
+    throw std::invalid_argument(engine + ": open containers (no floor or walls, e.g. the jaw crusher scene) are not "
+                                "supported; use engine \"lsdem\"");
+  if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
+      !std::isfinite(c.height))
+    throw std::invalid_argument(engine + ": container needs finite lx, ly, height > 0");
+  if (!(c.platen_mass >= 0)) throw std::invalid_argument(engine + ": container platen_mass must be >= 0");
+}
+
 }  // namespace crumble

@@ -3,6 +3,7 @@
 // platen by the same rules through a PlatenDriver; an engine only adapts them to its own
 // bodies and units.
 #pragma once
+#include <string>
 #include <vector>
 
 #include "core/Engine.h"
@@ -31,6 +32,11 @@ std::vector<WallPlane> container_planes(const Container& c, int dimension, doubl
 // the grains' total (unscaled) mass when that is 0, times the engine's mass scale (the
 // platen is slowed down like the grains). `grains_mass` is the unscaled total in kg.
 double platen_mass(const Container& c, double grains_mass, double mass_scale = 1);
+
+// The closed box of a rigid-body engine (floor, four side walls, platen): throws
+// std::invalid_argument naming `engine` for a non-finite or non-positive size, a negative
+// platen mass, or an open container (which only engines with moving walls support).
+void require_closed_box(const Container& c, const std::string& engine);
 
 // Vertical motion of the platen under a PlatenCommand.
 //  - Velocity: the platen moves at the commanded velocity (kinematic).

@@ -639,13 +639,7 @@ struct BulletEngine::Impl {
   }
 
   void set_container(const Container& c) {
-    if (c.open)
-      throw std::invalid_argument("bullet: open containers (no floor or walls, e.g. the jaw crusher scene) are not "
-                                  "supported; use engine \"lsdem\"");
-    if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
-        !std::isfinite(c.height))
-      throw std::invalid_argument("bullet: container needs finite lx, ly, height > 0");
-    if (!(c.platen_mass >= 0)) throw std::invalid_argument("bullet: container platen_mass must be >= 0");
+    require_closed_box(c, "bullet");
     container = c;
     have_container = true;
     driver.reset(c.height);

@@ -759,10 +759,7 @@ struct OdeEngine::Impl {
   }
 
   void set_container(const Container& c) {
-    if (!(c.lx > 0) || !(c.ly > 0) || !(c.height > 0) || !std::isfinite(c.lx) || !std::isfinite(c.ly) ||
-        !std::isfinite(c.height))
-      throw std::invalid_argument("ode: container needs finite lx, ly, height > 0");
-    if (!(c.platen_mass >= 0)) throw std::invalid_argument("ode: container platen_mass must be >= 0");
+    require_closed_box(c, "ode");
     container = c;
     have_container = true;
     driver.reset(c.height);
