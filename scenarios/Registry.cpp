@@ -51,10 +51,10 @@ template class Table<BuilderFactory>;
 Table<EngineFactory>& engines() {
   static Table<EngineFactory> t = [] {
     Table<EngineFactory> t("engine");
-    t.add({"lsdem", "in-house level-set DEM (seeds/004 §2), explicit, 2D and 3D",
+    t.add({"lsdem", "in-house level-set DEM (Harmon et al. 2020 §2), explicit, 2D and 3D",
            [](const Config& c, const EngineContext& ctx) { return make_lsdem_engine(c, ctx); }, {}, {2, 3}});
 #if CRUMBLE_WITH_BULLET
-    t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (seeds/000)",
+    t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (Zhu & Zhao 2019)",
            [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3}});
 #endif
 #if CRUMBLE_WITH_ODE
@@ -85,7 +85,7 @@ Table<BuilderFactory>& fragment_builders() {
   static Table<BuilderFactory> t = [] {
     Table<BuilderFactory> t("fragment builder");
 #if CRUMBLE_WITH_CGAL
-    t.add({"alpha_shape", "alpha-shape polyhedra of point clusters (CGAL, seeds/000 §3.2); plane cuts of the parent mesh",
+    t.add({"alpha_shape", "alpha-shape polyhedra of point clusters (CGAL, Zhu & Zhao 2019 §3.2); plane cuts of the parent mesh",
            [](const Config& c, const EngineContext& x) { return make_alpha_shape_builder(c, x); }, {}, {3}});
 #endif
     t.add({"level_set",
