@@ -3,7 +3,7 @@
 //   crumble validate SCENARIO [--set path=value]... [--print]
 //   crumble list
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
-//   crumble bench pd-kernel|lsdem ...
+//   crumble bench engine|pd-kernel|lsdem ...
 //   crumble --plugin lib.so <subcommand> ...   (out-of-tree engines, models, builders)
 // Exit status: 0 success, 2 bad input (scenario, option, mesh, output folder), 1 failure while
 // running, 130 / 143 a run ended early by SIGINT / SIGTERM (every output written).
@@ -348,7 +348,8 @@ int main(int argc, char** argv) {
   std::optional<int> threads;
   bool quiet = false, print = false, resume = false, force = false;
   double spacing = 0;
-  long nodes = 0, bench_steps = 1000;
+  long nodes = 0, bench_steps = 1000, bench_settle = -1;
+  std::string bench_engine;
   int bench_threads = 1;
 
   auto* run = app.add_subcommand("run", "run a scenario");
@@ -380,10 +381,14 @@ int main(int argc, char** argv) {
   shp->add_option("--nodes", nodes, "level-set surface nodes");
 
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON line on stdout)");
-  bench->add_option("what", bench_what, "pd-kernel | lsdem")->required();
+  bench->add_option("what", bench_what, "engine | pd-kernel | lsdem")->required();
   bench->add_option("--steps", bench_steps, "steps")->check(CLI::Range(1L, 100000000L));
   bench->add_option("--threads", bench_threads, "threads")->check(CLI::Range(1, 1024));
-  bench->add_option("--scenario", bench_scenario, "scenario file (lsdem)");
+  bench->add_option("--scenario", bench_scenario,
+                    "scenario file (lsdem; engine: default scenarios/oedometer_rigid_quick.json)");
+  bench->add_option("--engine", bench_engine, "engine for `bench engine` (bullet, ode, lsdem, ...)");
+  bench->add_option("--settle-steps", bench_settle, "engine: steps the placed grains fall before timing (default: settle them as the scenario's packing does)")
+      ->check(CLI::Range(-1L, 100000000L));
 
   try {
     app.parse(argc, argv);
@@ -404,7 +409,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*bench) {
-      std::cout << run_benchmark(bench_what, bench_steps, bench_threads, bench_scenario).dump() << "\n";
+      std::cout << run_benchmark(bench_what, bench_steps, bench_threads, bench_scenario, bench_engine, bench_settle).dump() << "\n";
       return 0;
     }
   } catch (const ConfigError& e) {
