@@ -3,6 +3,7 @@
 // through its library's own API (no crumble adapter in the loop) and step them, so the
 // adapter's per-step cost can be compared with the raw library's on identical bodies.
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "geometry/TriMesh.h"
@@ -35,10 +36,15 @@ struct RawScene {
   int contacts_per_pair = 1;      // ODE: most points per dCollide call
 };
 
-struct RawBenchResult {
-  long steps = 0;
-  double seconds = 0;
-  double mean_contacts = 0;  // touching points or manifolds per step, as the library counts them
+// The same bodies inside a library's own world, stepped by `dt` with the library's API only.
+// The benchmark steps it alternately with the adapter, so both see the same machine load.
+class RawWorld {
+ public:
+  virtual ~RawWorld() = default;
+  virtual void step() = 0;
+  // Touching pairs (grain–grain and grain–wall) in the last step: Bullet's manifolds that
+  // carried an impulse, ODE's contact points (one per pair at contacts_per_pair = 1).
+  virtual int contact_pairs() const = 0;
 };
 
 }  // namespace crumble

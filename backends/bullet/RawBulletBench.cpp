@@ -2,7 +2,6 @@
 
 #include <btBulletDynamicsCommon.h>
 
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -17,18 +16,41 @@ namespace crumble {
 namespace {
 btVector3 bt(const Vec3& v) { return {v.x, v.y, v.z}; }
 btQuaternion bt(const Quat& q) { return {q.x, q.y, q.z, q.w}; }
-}  // namespace
 
-RawBenchResult raw_bullet_bench(const RawScene& sc, long steps) {
-  if (steps < 1) throw std::invalid_argument("raw bullet bench: steps must be >= 1");
-  const double s = sc.length_scale;
+class RawBulletWorld final : public RawWorld {
+ public:
+  explicit RawBulletWorld(const RawScene& sc);
+  ~RawBulletWorld() override {
+    for (auto& b : bodies) world.removeRigidBody(b.get());
+  }
+  void step() override { world.stepSimulation(dt, 0); }
+  int contact_pairs() const override {
+    int n = 0;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+      const btPersistentManifold* mf = dispatcher.getManifoldByIndexInternal(m);
+      bool pushed = false;
+      for (int p = 0; p < mf->getNumContacts(); ++p) pushed = pushed || mf->getContactPoint(p).m_appliedImpulse > 0;
+      n += pushed ? 1 : 0;
+    }
+    return n;
+  }
+
+ private:
+  double dt;
   btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher(&config);
-  dispatcher.setDispatcherFlags(dispatcher.getDispatcherFlags() |
-                                btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD);
+  mutable btCollisionDispatcher dispatcher{&config};
   btDbvtBroadphase broadphase;
   btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btDefaultMotionState>> states;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+};
+
+RawBulletWorld::RawBulletWorld(const RawScene& sc) : dt(sc.dt) {
+  const double s = sc.length_scale;
+  dispatcher.setDispatcherFlags(dispatcher.getDispatcherFlags() |
+                                btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD);
   // Mass scaling keeps weights physical: the scaled bodies fall at g / mass_scale.
   world.setGravity(bt(sc.gravity * (s / sc.mass_scale)));
   world.getDispatchInfo().m_deterministicOverlappingPairs = true;
@@ -40,9 +62,6 @@ RawBenchResult raw_bullet_bench(const RawScene& sc, long steps) {
   si.m_solverMode = SOLVER_USE_WARMSTARTING | SOLVER_USE_2_FRICTION_DIRECTIONS;
   si.m_leastSquaresResidualThreshold = 0;
 
-  std::vector<std::unique_ptr<btCollisionShape>> shapes;
-  std::vector<std::unique_ptr<btDefaultMotionState>> states;
-  std::vector<std::unique_ptr<btRigidBody>> bodies;
   auto add_static = [&](btCollisionShape* shape, const btTransform& t, double friction) {
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape);
     info.m_startWorldTransform = t;
@@ -102,24 +121,12 @@ RawBenchResult raw_bullet_bench(const RawScene& sc, long steps) {
     world.addRigidBody(body);
     shapes.push_back(std::move(hull));
   }
+}
 
-  RawBenchResult r;
-  r.steps = steps;
-  double contacts = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (long k = 0; k < steps; ++k) {
-    world.stepSimulation(sc.dt, 0);
-    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {  // pairs that pushed, as the adapter counts them
-      const btPersistentManifold* mf = dispatcher.getManifoldByIndexInternal(m);
-      bool pushed = false;
-      for (int p = 0; p < mf->getNumContacts(); ++p) pushed = pushed || mf->getContactPoint(p).m_appliedImpulse > 0;
-      contacts += pushed ? 1 : 0;
-    }
-  }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.mean_contacts = contacts / steps;
-  for (auto& b : bodies) world.removeRigidBody(b.get());
-  return r;
+}  // namespace
+
+std::unique_ptr<RawWorld> make_raw_bullet_world(const RawScene& scene) {
+  return std::make_unique<RawBulletWorld>(scene);
 }
 
 }  // namespace crumble

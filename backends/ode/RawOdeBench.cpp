@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -19,12 +18,13 @@ struct ConvexArrays {
 };
 
 struct RawOde {
+  double dt = 0;
   dWorldID world = nullptr;
   dSpaceID space = nullptr;
   dJointGroupID contacts = nullptr;
   double mu = 0, wall_mu = 0, rho = 0, erp = 0.003;
   int per_pair = 1;
-  long touching = 0;
+  int touching = 0;
 
   static void near(void* data, dGeomID a, dGeomID b) {
     auto* self = static_cast<RawOde*>(data);
@@ -49,16 +49,34 @@ struct RawOde {
   }
 };
 
-}  // namespace
+class RawOdeWorld final : public RawWorld {
+ public:
+  explicit RawOdeWorld(const RawScene& sc);
+  ~RawOdeWorld() override {
+    dJointGroupDestroy(o.contacts);
+    dSpaceDestroy(o.space);  // destroys the geoms it holds
+    dWorldDestroy(o.world);
+  }
+  void step() override {
+    dJointGroupEmpty(o.contacts);
+    o.touching = 0;
+    dSpaceCollide(o.space, &o, &RawOde::near);
+    dWorldQuickStep(o.world, o.dt);
+  }
+  int contact_pairs() const override { return o.touching; }
 
-RawBenchResult raw_ode_bench(const RawScene& sc, long steps) {
-  if (steps < 1) throw std::invalid_argument("raw ode bench: steps must be >= 1");
+ private:
+  RawOde o;
+  std::vector<ConvexArrays> convex;
+};
+
+RawOdeWorld::RawOdeWorld(const RawScene& sc) {
   if (sc.contacts_per_pair < 1 || sc.contacts_per_pair > 16)
     throw std::invalid_argument("raw ode bench: contacts_per_pair must be in [1, 16]");
   const double s = sc.length_scale;
   dInitODE2(0);
   dAllocateODEDataForThread(dAllocateMaskAll);
-  RawOde o;
+  o.dt = sc.dt;
   o.world = dWorldCreate();
   o.space = dHashSpaceCreate(nullptr);
   o.contacts = dJointGroupCreate(0);
@@ -83,7 +101,7 @@ RawBenchResult raw_ode_bench(const RawScene& sc, long steps) {
   dGeomID lid = dCreateBox(o.space, 1.1 * sc.lx * s, 1.1 * sc.ly * s, 2 * hz);
   dGeomSetPosition(lid, 0.5 * sc.lx * s, 0.5 * sc.ly * s, sc.platen_z * s + hz);
 
-  std::vector<ConvexArrays> convex(sc.bodies.size());
+  convex.resize(sc.bodies.size());
   for (std::size_t i = 0; i < sc.bodies.size(); ++i) {
     const RawBody& b = sc.bodies[i];
     ConvexArrays& c = convex[i];
@@ -111,21 +129,10 @@ RawBenchResult raw_ode_bench(const RawScene& sc, long steps) {
     dBodySetLinearVel(body, b.velocity.x * s, b.velocity.y * s, b.velocity.z * s);
     dBodySetAngularVel(body, b.angular_velocity.x, b.angular_velocity.y, b.angular_velocity.z);
   }
-
-  RawBenchResult r;
-  r.steps = steps;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (long k = 0; k < steps; ++k) {
-    dJointGroupEmpty(o.contacts);
-    dSpaceCollide(o.space, &o, &RawOde::near);
-    dWorldQuickStep(o.world, sc.dt);
-  }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.mean_contacts = double(o.touching) / steps;
-  dJointGroupDestroy(o.contacts);
-  dSpaceDestroy(o.space);  // destroys the geoms it holds
-  dWorldDestroy(o.world);
-  return r;
 }
+
+}  // namespace
+
+std::unique_ptr<RawWorld> make_raw_ode_world(const RawScene& scene) { return std::make_unique<RawOdeWorld>(scene); }
 
 }  // namespace crumble

@@ -9,6 +9,6 @@
 
 namespace crumble {
 
-RawBenchResult raw_ode_bench(const RawScene& scene, long steps);
+std::unique_ptr<RawWorld> make_raw_ode_world(const RawScene& scene);
 
 }  // namespace crumble
