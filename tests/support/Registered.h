@@ -12,6 +12,7 @@
 #pragma once
 #include <cctype>
 #include <cstdlib>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,7 @@ inline std::string sanitized(std::string s) {
   return s;
 }
 inline std::string param_name(const Registered& r) { return sanitized(r.name) + "_" + std::to_string(r.dimension) + "d"; }
+inline void PrintTo(const Registered& r, std::ostream* os) { *os << param_name(r); }
 
 template <class Table>
 std::vector<Registered> registered(const Table& t) {
