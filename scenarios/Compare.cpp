@@ -177,13 +177,16 @@ double num(const Json& j, const std::string& key) {
 }
 
 // void_ratio_at_stress_<Pa>_Pa, then void_ratio_at_strain_<value>, each by level.
-std::vector<std::string> level_keys(const std::vector<ComparisonRow>& rows) {
+std::vector<std::string> level_keys(const std::vector<ComparisonRow>& rows, const std::vector<std::string>& expected) {
   std::vector<std::pair<std::pair<int, double>, std::string>> keys;
   std::set<std::string> seen;
+  std::vector<std::string> all = expected;
   for (const auto& r : rows) {
     if (!r.summary.is_object()) continue;
-    for (auto it = r.summary.begin(); it != r.summary.end(); ++it) {
-      const std::string& k = it.key();
+    for (auto it = r.summary.begin(); it != r.summary.end(); ++it) all.push_back(it.key());
+  }
+  {
+    for (const auto& k : all) {
       if (k.rfind("void_ratio_at_", 0) != 0 || !seen.insert(k).second) continue;
       const bool stress = k.rfind("void_ratio_at_stress_", 0) == 0;
       const std::string rest = k.substr(stress ? 21 : std::strlen("void_ratio_at_strain_"));
@@ -217,9 +220,12 @@ const std::vector<std::string> kTimeParts = {"engine", "contacts", "screening", 
 
 }  // namespace
 
+std::string void_ratio_stress_key(double stress) { return "void_ratio_at_stress_" + fmt_num(stress) + "_Pa"; }
+std::string void_ratio_strain_key(double strain) { return "void_ratio_at_strain_" + fmt_num(strain); }
+
 void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
-                      const std::vector<std::string>& header) {
-  const auto levels = level_keys(rows);
+                      const std::vector<std::string>& expected_levels, const std::vector<std::string>& header) {
+  const auto levels = level_keys(rows, expected_levels);
   std::vector<std::pair<std::string, std::string>> optional;
   for (const auto& o : kOptional)
     for (const auto& r : rows)
@@ -472,7 +478,13 @@ int run_compare(const CompareRequest& req) {
           throw InputError("--vary " + a.arg + ": every combination starts from the one packing built from the "
                            "scenario, so '" + a.path + "' cannot vary; fix it with --set, or run one compare per "
                            "packing");
-  build_request(base);  // a --set or scenario problem is reported as such, not per combination
+  std::vector<std::string> levels;
+  {
+    // A --set or scenario problem is reported as such, not per combination.
+    const Scenario sc = build_request(base);
+    for (double s : sc.output.psd_at_stress) levels.push_back(void_ratio_stress_key(s));
+    for (double s : sc.output.psd_at_strain) levels.push_back(void_ratio_strain_key(s));
+  }
 
   // Every combination is checked before anything runs (with the scenario's own packing; the
   // shared packing.json holds the same grains).
@@ -508,7 +520,7 @@ int run_compare(const CompareRequest& req) {
   }() + ";";
   for (const auto& s : req.sets) how += " `--set " + s + "`;";
   header.push_back(how + " " + std::to_string(combos.size()) + " combinations, " + std::to_string(req.jobs) +
-                   " at a time" + (req.threads ? ", " + std::to_string(*req.threads) + " threads each" : "") + ".");
+                   " at a time" + (req.threads ? ", " + std::to_string(*req.threads) + (*req.threads == 1 ? " thread" : " threads") + " each" : "") + ".");
 
   // 1. The packing, once (each combination loads DIR/packing.json, no settling of its own).
   std::optional<std::string> packing_file;
@@ -608,7 +620,7 @@ int run_compare(const CompareRequest& req) {
     if (r.exit_status < 0) r.reason = "not started: the comparison was interrupted";
 
   header.push_back("Wall time of the whole comparison: " + fmt(seconds_since(t0), 4) + " s.");
-  write_comparison(dir.string(), axes, rows, header);
+  write_comparison(dir.string(), axes, rows, levels, header);
   if (!req.quiet)
     std::cerr << "crumble: compare: " << combos.size() << " combinations in " << fmt(seconds_since(t0), 4)
               << " s; table in " << (dir / "comparison.md").string() << "\n";

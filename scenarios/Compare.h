@@ -59,10 +59,15 @@ struct ComparisonRow {
   nlohmann::json summary;  // DIR/<combination>/summary.json (null when there is none)
 };
 
-// comparison.csv and comparison.md in `dir`, from the rows' summaries only. `header` lines
-// go above the Markdown table.
+// summary.json keys of the void ratio at a reported stress (Pa) or axial strain level.
+std::string void_ratio_stress_key(double stress);
+std::string void_ratio_strain_key(double strain);
+
+// comparison.csv and comparison.md in `dir`, from the rows' summaries only. `levels`: the
+// void-ratio keys the scenario reports (a column each even when no run reached the level;
+// keys found in the summaries are added). `header` lines go above the Markdown table.
 void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
-                      const std::vector<std::string>& header);
+                      const std::vector<std::string>& levels, const std::vector<std::string>& header);
 
 // Runs a comparison. Returns the exit status: 0 every combination ran, 1 one failed (its row
 // says why; the others still run), 130/143 interrupted. Bad input (any combination's

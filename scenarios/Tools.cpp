@@ -13,6 +13,7 @@
 #include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
+#include "scenarios/Compare.h"
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Writers.h"
 
@@ -125,9 +126,9 @@ class ReportRecorder : public Observer {
     };
     double e = 0;
     for (double s : stresses_)
-      if (first_reaching(3, s, &e)) sum.extra["void_ratio_at_stress_" + fmt_num(s) + "_Pa"] = e;
+      if (first_reaching(3, s, &e)) sum.extra[void_ratio_stress_key(s)] = e;
     for (double s : strains_)
-      if (first_reaching(5, s, &e)) sum.extra["void_ratio_at_strain_" + fmt_num(s)] = e;
+      if (first_reaching(5, s, &e)) sum.extra[void_ratio_strain_key(s)] = e;
     // Final PSD by mass: removed fines count at size 0 (Harmon et al. 2020 §3.4: removed
     // particles stay in the PSD).
     std::vector<double> sizes, masses;
