@@ -1,5 +1,6 @@
 // crumble: the command line.
 //   crumble run SCENARIO --out DIR [--set path=value]... [--seed N] [--threads N]
+//   crumble compare SCENARIO --out DIR --vary path=v1,v2... [--set path=value]... [--jobs N]
 //   crumble validate SCENARIO [--set path=value]... [--print]
 //   crumble list [--options NAME [--markdown]]
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
@@ -22,9 +23,11 @@
 #include "crumble_config.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
+#include "scenarios/Compare.h"
 #include "scenarios/OptionDocs.h"
 #include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
+#include "scenarios/RunPipeline.h"
 #include "scenarios/ScenarioFactory.h"
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Tools.h"
@@ -36,269 +39,54 @@ using Json = nlohmann::json;
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int sig) {
-  g_signal.store(sig);
-  g_stop.store(true);
-}
-// An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
-int interrupted_status() { return g_signal.load() == SIGINT ? 130 : 143; }
-
-struct InputError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 const char* kExitStatus =
     "Exit status: 0 success; 2 bad input (the message names the file, the JSON path and what was expected; "
     "also an --out folder that holds another run); 1 a failure while running; 130 (SIGINT, Ctrl-C) or 143 "
     "(SIGTERM): the run was interrupted, every output was written (\"interrupted\": true in summary.json).";
 
-// Files a run writes into --out (and their temporary names): the only files --force removes.
-bool is_run_output(const std::string& name) {
-  static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv",
-                                              "ncl.csv", "psd.csv", "shape.csv", "product_psd.csv", "product.csv",
-                                              "grains.pvd", "effective_scenario.json",
-                                              "packing.json", "checkpoint.json"};
-  for (const char* suffix : {"", ".part", ".tmp", ".part.tmp"}) {
-    const std::string sfx = suffix;
-    if (name.size() > sfx.size() && name.compare(name.size() - sfx.size(), sfx.size(), sfx) == 0 &&
-        files.count(name.substr(0, name.size() - sfx.size())))
-      return true;
-  }
-  return false;
-}
-bool is_vtk_output(const std::string& name) {
-  // vtk/grains_NNNNNNNN.vtp (and its temporary name)
-  return name.rfind("grains_", 0) == 0 &&
-         (name.size() > 4 && (name.compare(name.size() - 4, 4, ".vtp") == 0 ||
-                              (name.size() > 8 && name.compare(name.size() - 8, 8, ".vtp.tmp") == 0)));
-}
-
-// Entries of DIR that crumble wrote (vtk/ counted as one when it holds only snapshots).
-std::vector<std::string> run_outputs(const fs::path& dir, std::vector<std::string>* others) {
-  std::vector<std::string> mine;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string n = e.path().filename().string();
-    bool ours = e.is_regular_file() && is_run_output(n);
-    if (e.is_directory() && n == "vtk") {
-      ours = true;
-      for (const auto& v : fs::directory_iterator(e.path()))
-        if (!(v.is_regular_file() && is_vtk_output(v.path().filename().string()))) ours = false;
-    }
-    (ours ? mine : *others).push_back(n);
-  }
-  std::sort(mine.begin(), mine.end());
-  std::sort(others->begin(), others->end());
-  return mine;
-}
-
-std::string list_names(const std::vector<std::string>& v) {
-  std::string s;
-  for (std::size_t i = 0; i < v.size() && i < 6; ++i) s += (i ? ", " : "") + v[i];
-  if (v.size() > 6) s += ", …";
-  return s;
-}
-
-// A fresh run never mixes its files with another run's: an --out folder that is not empty is
-// refused unless --force, which removes crumble's own files of the earlier run (never other
-// files) first.
-void prepare_fresh_out(const std::string& out, bool force) {
-  std::error_code ec;
-  if (!fs::exists(out, ec)) return;
-  if (!fs::is_directory(out, ec)) throw InputError("--out " + out + ": exists and is not a directory");
-  std::vector<std::string> others;
-  const auto mine = run_outputs(out, &others);
-  if (mine.empty() && others.empty()) return;
-  if (!force) {
-    const bool resumable = fs::exists(fs::path(out) / "checkpoint.json");
-    throw InputError("--out " + out + ": the folder is not empty (" + list_names(mine.empty() ? others : mine) +
-                     "); a new run would mix its files with " + (mine.empty() ? "these" : "an earlier run's") +
-                     ". Choose an empty folder, pass --force to remove the earlier run's files first" +
-                     (resumable ? ", or --resume to continue the run it holds" : "") + ".");
-  }
-  for (const auto& n : mine) {
-    const fs::path p = fs::path(out) / n;
-    if (n == "vtk") {
-      for (const auto& v : fs::directory_iterator(p)) fs::remove(v.path());
-      fs::remove(p);
-    } else {
-      fs::remove(p);
-    }
-  }
-}
-
-// The first JSON path where two documents differ ("" when equal), skipping `ignore`.
-std::string first_difference(const Json& a, const Json& b, const std::string& path,
-                             const std::set<std::string>& ignore) {
-  if (ignore.count(path)) return "";
-  if (a.is_object() && b.is_object()) {
-    std::set<std::string> keys;
-    for (auto it = a.begin(); it != a.end(); ++it) keys.insert(it.key());
-    for (auto it = b.begin(); it != b.end(); ++it) keys.insert(it.key());
-    for (const auto& k : keys) {
-      const std::string p = path + "/" + k;
-      if (ignore.count(p)) continue;
-      if (!a.contains(k) || !b.contains(k)) return p;
-      const std::string d = first_difference(a[k], b[k], p, ignore);
-      if (!d.empty()) return d;
-    }
-    return "";
-  }
-  if (a.is_array() && b.is_array()) {
-    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
-      const std::string d = first_difference(a[i], b[i], path + "/" + std::to_string(i), ignore);
-      if (!d.empty()) return d;
-    }
-    return a.size() == b.size() ? "" : path + "/" + std::to_string(std::min(a.size(), b.size()));
-  }
-  return a == b ? "" : (path.empty() ? "/" : path);
-}
-
-// Keys that may differ between a run and its resumption: the thread count (results do not
-// depend on it) and simulation.max_steps (raising it is how a run stopped by it continues).
-const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps"};
-
-void check_resumable(const std::string& out, const Json& effective) {
-  const fs::path dir(out);
-  if (!fs::exists(dir / "checkpoint.json"))
-    throw InputError("--out " + out + " --resume: no checkpoint.json to resume from (a run writes one when "
-                     "output.checkpoint_every > 0)");
-  std::ifstream in(dir / "effective_scenario.json");
-  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
-  const std::string d = first_difference(before, effective, "", kResumeMayDiffer);
-  if (d.empty()) return;
-  auto show = [&](const Json& j) {
-    try {
-      const Json::json_pointer ptr(d == "/" ? "" : d);
-      return j.contains(ptr) ? j.at(ptr).dump() : std::string("(absent)");
-    } catch (const std::exception&) {
-      return std::string("?");
-    }
-  };
-  throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
-                   ", now " + show(effective) +
-                   "); a resumed run must use the same effective scenario (only /threads and "
-                   "/simulation/max_steps may change). Use the same file and --set options, or start a new run "
-                   "in another folder");
-}
-
-// packing_settle_steps of the run being resumed (its last summary.json), -1 when unknown.
-double previous_settle_steps(const std::string& out) {
-  std::ifstream in(fs::path(out) / "summary.json");
-  if (!in) return -1;
-  try {
-    const Json j = Json::parse(in);
-    if (j.contains("packing_settle_steps") && j["packing_settle_steps"].is_number())
-      return j["packing_settle_steps"].get<double>();
-  } catch (const std::exception&) {
-  }
-  return -1;
-}
-
-
-Scenario load(const std::string& file, const std::vector<std::string>& sets, std::optional<std::uint64_t> seed,
-              std::optional<int> threads) {
-  BuildOptions opt;
-  opt.overrides = sets;
-  opt.seed = seed;
-  opt.threads = threads;
-  opt.source_name = file;
-  Json doc = load_scenario_file(file);
-  Scenario sc = build_scenario(std::move(doc), opt);
-  for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
-  return sc;
-}
-
+// `crumble run`: the shared run pipeline (scenarios/RunPipeline.h).
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,
             std::optional<std::uint64_t> seed, std::optional<int> threads, bool quiet, bool resume, bool force) {
-  Scenario sc = load(file, sets, seed, threads);
-  if (resume && force) throw InputError("--resume and --force exclude each other");
-  double settle_before = -1;
-  if (resume) {
-    check_resumable(out, sc.effective);
-    settle_before = previous_settle_steps(out);
-  } else {
-    prepare_fresh_out(out, force);
-  }
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
+  RunRequest req;
+  req.scenario = load_scenario_file(file);
+  req.source_name = file;
+  req.out = out;
+  req.sets = sets;
+  req.seed = seed;
+  req.threads = threads;
+  req.quiet = quiet;
+  req.resume = resume;
+  req.force = force;
+  const RunResult r = run_pipeline(req);
+  if (r.status == 1) std::cerr << "crumble: failed: " << r.reason << "\n";
+  return r.status;
+}
 
-  Simulation& sim = *sc.sim;
-  // Ctrl-C / SIGTERM: finish the current step, then write every output and the checkpoint.
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  const auto t0 = std::chrono::steady_clock::now();
-  long settle_steps = 0, resumed_step = -1;
-  bool packing_settled = true;
-  if (resume) {
-    // Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
-    Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
-    Container c = sc.packing.container;
-    c.height = cp.state.platen_position;
-    sim.set_container(c);
-    resumed_step = cp.state.step;
-    sim.resume(cp.state, std::move(cp.grains));
-    if (!quiet)
-      std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
-                << sim.grains().size() << " grains)\n";
-  } else {
-    write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
-    if (!quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-    const SettleResult settled = build_packing(sim, sc.packing, &g_stop);
-    settle_steps = settled.steps;
-    if (settled.interrupted) {
-      // An unsettled packing is not the start of this run: nothing is written that a
-      // later --resume or another scenario could take for it.
-      std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
-                << " steps); no packing.json or checkpoint was written: start the run again (with --force to reuse this folder)\n";
-      return interrupted_status();
-    }
-    if (!settled.converged)
-      std::cerr << "crumble: warning: the packing did not come to rest within packing.settle.max_time ("
-                << settled.steps << " steps); the run starts from it anyway (summary.json: packing_settled false)\n";
-    packing_settled = settled.converged;
-    write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
-    if (!quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
-  }
-
-  attach_standard_observers(sc, out);
-  sim.set_stop_flag(&g_stop);
-  const auto t_loading = std::chrono::steady_clock::now();
-  auto progress = [&](const RunState& s, double f) {
-    if (quiet) return;
-    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_loading).count();
-    std::cerr << format_progress(s, f, el) << "\n";
-  };
-  RunSummary sum = sim.run(progress);
-  // A resumed run settled nothing: report the settling of the run it continues.
-  if (!resume) {
-    sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
-    sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
-  } else if (settle_before >= 0) {
-    sum.extra["packing_settle_steps"] = settle_before;
-  }
-  if (resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
-  sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
-  write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
-  if (sum.interrupted)
-    std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
-              << (sc.output.checkpoint_every > 0 ? ", resume with --resume\n" : "\n");
-  if (!quiet)
-    std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
-              << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n";
-  // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
-  if (sum.interrupted) return interrupted_status();
-  return 0;
+// `crumble compare`: every combination of the --vary values from one packing (scenarios/Compare.h).
+int cmd_compare(const std::string& file, const std::string& out, const std::vector<std::string>& vary,
+                const std::vector<std::string>& sets, std::optional<std::uint64_t> seed, std::optional<int> threads,
+                int jobs, bool quiet, bool force) {
+  CompareRequest req;
+  req.scenario = load_scenario_file(file);
+  req.source_name = file;
+  req.out = out;
+  req.vary = vary;
+  req.sets = sets;
+  req.seed = seed;
+  req.threads = threads;
+  req.jobs = jobs;
+  req.quiet = quiet;
+  req.force = force;
+  return run_compare(req);
 }
 
 int cmd_validate(const std::string& file, const std::vector<std::string>& sets, bool print) {
-  Scenario sc = load(file, sets, std::nullopt, std::nullopt);
+  RunRequest req;
+  req.scenario = load_scenario_file(file);
+  req.source_name = file;
+  req.sets = sets;
+  Scenario sc = build_request(req);
+  for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
   if (print) std::cout << sc.effective.dump(2) << "\n";
   std::cerr << file << ": ok (" << sc.packing.grains.size() << " grains, engine " << sc.engine_name << ", breakage "
             << sc.breakage_name << ", fragments " << sc.fragments_name << ")\n";
@@ -386,6 +174,26 @@ int main(int argc, char** argv) {
                 "use a non-empty --out folder: first remove the earlier run's files there (only crumble's own)");
   run->footer(kExitStatus);
 
+  std::vector<std::string> vary;
+  int jobs = 1;
+  auto* cmp = app.add_subcommand("compare", "run a scenario under every combination of --vary values, from one packing");
+  cmp->add_option("scenario", file, "scenario JSON file")->required();
+  cmp->add_option("--out", out, "output directory (one folder per combination, comparison.csv, comparison.md)")
+      ->required();
+  cmp->add_option("--vary", vary, "path=value1,value2,... (repeatable; e.g. engine.type=bullet,lsdem,ode)")
+      ->required();
+  cmp->add_option("--set", sets, "fix a scenario value for every combination: path=value");
+  cmp->add_option("--seed", seed, "random seed (overrides the scenario's)");
+  cmp->add_option("--threads", threads, "threads of each run (overrides the scenario's)")->check(CLI::Range(1, 1024));
+  cmp->add_option("--jobs", jobs, "combinations run at the same time (each a process; default 1)")
+      ->check(CLI::Range(1, 64));
+  cmp->add_flag("--quiet", quiet, "only errors on stderr");
+  cmp->add_flag("--force", force,
+                "use a non-empty --out folder: first remove the files an earlier compare wrote (only crumble's own)");
+  cmp->footer("Exit status: 0 every combination ran; 1 one or more failed while running (their rows say why, the "
+              "others still ran); 2 bad input in any combination (checked before anything runs); 130/143 "
+              "interrupted.");
+
   auto* val = app.add_subcommand("validate", "check a scenario without running it");
   val->add_option("scenario", file, "scenario JSON file")->required();
   val->add_option("--set", sets, "override a scenario value: path=value");
@@ -427,6 +235,7 @@ int main(int argc, char** argv) {
   try {
     for (const auto& p : plugins) load_plugin(p);
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
+    if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
     if (*val) return cmd_validate(file, sets, print);
     if (*lst) {
       if (list_markdown && list_options.empty()) throw InputError("list --markdown needs --options NAME");

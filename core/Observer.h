@@ -54,6 +54,7 @@ struct BreakageEvent {
 };
 
 struct Timings {
+  // fragments: building the children (FragmentBuilder::build) and putting them into the engine.
   double engine = 0, contacts = 0, screening = 0, analyses = 0, fragments = 0, observers = 0, guards = 0;
 };
 

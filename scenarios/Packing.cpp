@@ -236,7 +236,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
         fc.number("platen_mass", 0);
       }
       file_cfg->integer("dimension", dim, dim, dim);
-      file_cfg->check_unknown();
+      // Unknown keys are checked once the grain entries are read (below).
     } else {
       entries = pc.children("grains");
       spec.settle = pc.boolean("settle", false);

@@ -26,6 +26,7 @@
 #include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
+#include "scenarios/Compare.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Writers.h"
@@ -117,6 +118,59 @@ class CompressionRecorder : public Observer {
   std::vector<std::size_t> n_;
 };
 
+// Figures `crumble compare` tabulates, in summary.json: the void ratio at each reported
+// stress or strain level (output.psd_at_stress / psd_at_strain: the first series sample that
+// reaches it, as psd.csv; read from the finished series.csv so a resumed run covers its whole
+// history), and d50 and the fines fraction of the final size distribution by mass.
+class ReportRecorder : public Observer {
+ public:
+  ReportRecorder(std::string dir, std::vector<double> stresses, std::vector<double> strains, double fines_size)
+      : dir_(std::move(dir)), stresses_(std::move(stresses)), strains_(std::move(strains)), fines_size_(fines_size) {}
+  void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
+    const auto rows = read_csv(dir_ + "/series.csv");
+    auto first_reaching = [&](std::size_t column, double level, double* e) {
+      for (std::size_t i = 1; i < rows.size(); ++i) {
+        if (rows[i].size() < 8) continue;
+        if (std::atof(rows[i][column].c_str()) >= level) {
+          *e = std::atof(rows[i][6].c_str());
+          return true;
+        }
+      }
+      return false;
+    };
+    double e = 0;
+    for (double s : stresses_)
+      if (first_reaching(3, s, &e)) sum.extra[void_ratio_stress_key(s)] = e;
+    for (double s : strains_)
+      if (first_reaching(5, s, &e)) sum.extra[void_ratio_strain_key(s)] = e;
+    // Final PSD by mass: removed fines count at size 0 (Harmon et al. 2020 §3.4: removed
+    // particles stay in the PSD).
+    std::vector<double> sizes, masses;
+    double fines = sum.mass_removed, total = sum.mass_removed;
+    for (const auto& g : sim.grains()) {
+      const double d = g.shape->equivalent_diameter();
+      const double m = g.shape->volume() * sim.context().materials[g.material].density;
+      sizes.push_back(d);
+      masses.push_back(m);
+      total += m;
+      if (d < fines_size_) fines += m;
+    }
+    if (sum.mass_removed > 0) {
+      sizes.push_back(0.0);
+      masses.push_back(sum.mass_removed);
+    }
+    const double d50 = mass_quantile(sizes, masses, 0.5);
+    if (std::isfinite(d50)) sum.extra["psd_d50_final_m"] = d50;
+    if (total > 0) sum.extra["fines_fraction_final"] = fines / total;
+    sum.extra["fines_size_m"] = fines_size_;
+  }
+
+ private:
+  std::string dir_;
+  std::vector<double> stresses_, strains_;
+  double fines_size_;
+};
+
 Json mass_json(const MassProperties& mp) {
   Json I = Json::array();
   for (int i = 0; i < 3; ++i) I.push_back({mp.inertia(i, 0), mp.inertia(i, 1), mp.inertia(i, 2)});
@@ -147,6 +201,19 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));
+  {
+    // Fines: finer than the crushing limit (screening.min_diameter, Zhu & Zhao 2019 §5: grains
+    // below it are not analysed) or simulation.fines_diameter (removed, Harmon et al. 2020 §3.4).
+    const Json& e = sc.effective;
+    double fines_size = 0;
+    if (e.contains("screening") && e["screening"].is_object() && e["screening"].contains("min_diameter") &&
+        e["screening"]["min_diameter"].is_number())
+      fines_size = e["screening"]["min_diameter"].get<double>();
+    if (e.contains("simulation") && e["simulation"].is_object() && e["simulation"].contains("fines_diameter") &&
+        e["simulation"]["fines_diameter"].is_number())
+      fines_size = std::max(fines_size, e["simulation"]["fines_diameter"].get<double>());
+    sim.add_observer(std::make_shared<ReportRecorder>(out, sc.output.psd_at_stress, sc.output.psd_at_strain, fines_size));
+  }
   if (sc.output.checkpoint_every > 0)
     sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());

@@ -3,8 +3,10 @@
 // independence of the thread count.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <map>
+#include <thread>
 
 #include "core/Simulation.h"
 
@@ -53,12 +55,14 @@ class SqueezeEngine : public Engine {
 // Breaks a grain when the largest contact force exceeds its strength.
 class ThresholdModel : public BreakageModel {
  public:
+  explicit ThresholdModel(double delay_s = 0) : delay_(delay_s) {}
   std::string name() const override { return "threshold"; }
   void assign_strength(Grain& g, const Material&, Rng& rng) const override { g.strength.set("limit_N", 50 + 50 * rng.uniform()); }
   void inherit_strength(const Grain& p, Grain& c, const Material&, Rng&) const override {
     c.strength.set("limit_N", 1000 * p.strength.get("limit_N"));  // children never break here
   }
   BreakageAnalysis analyse(const Grain& g, const Material&, std::span<const Contact> cs) const override {
+    if (delay_ > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay_));
     BreakageAnalysis a;
     for (const auto& c : cs) a.load = std::max(a.load, norm(c.force));
     a.broken = a.load > g.strength.get("limit_N");
@@ -66,15 +70,19 @@ class ThresholdModel : public BreakageModel {
     if (a.broken) a.fracture = CuttingSurfaces{{CutPlane{{1, 0, 0}, 0}}};
     return a;
   }
+
+ private:
+  double delay_;
 };
 
 // A sphere → one sphere of 7/8 of the volume at +x and one of 1/8 at −x (volume exact).
 // With `chip`, the 1/8 piece is dropped by the builder itself (FragmentResult::removed_volume).
 class EighthBuilder : public FragmentBuilder {
  public:
-  explicit EighthBuilder(bool chip = false) : chip_(chip) {}
+  explicit EighthBuilder(bool chip = false, double delay_s = 0) : chip_(chip), delay_(delay_s) {}
   std::string name() const override { return "eighth"; }
   FragmentResult build(const Shape& parent, const Fracture&) const override {
+    if (delay_ > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay_));
     const double V = parent.volume();
     auto big = Shape::sphere(std::cbrt(0.875 * V * 3 / (4 * kPi)));
     auto small = Shape::sphere(std::cbrt(0.125 * V * 3 / (4 * kPi)));
@@ -90,6 +98,7 @@ class EighthBuilder : public FragmentBuilder {
 
  private:
   bool chip_;
+  double delay_;
 };
 
 struct Outcome {
@@ -98,7 +107,7 @@ struct Outcome {
   std::size_t events = 0;
 };
 
-Outcome run_with(int threads, double fines, bool chip = false) {
+Outcome run_with(int threads, double fines, bool chip = false, double model_delay = 0, double build_delay = 0) {
   EngineContext ctx;
   SimulationSettings ss;
   ss.time_steps = {{1e300, 1e-3}};
@@ -115,8 +124,8 @@ Outcome run_with(int threads, double fines, bool chip = false) {
   ScreeningSettings scr;
   scr.force_threshold = false;
   scr.min_diameter = 0;
-  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
-                 std::make_unique<EighthBuilder>(chip), ctx, ss, ls, sch, scr, 123);
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(model_delay),
+                 std::make_unique<EighthBuilder>(chip, build_delay), ctx, ss, ls, sch, scr, 123);
   sim.set_container({0.01, 0.01, 0.01, 0});
   for (int i = 0; i < 8; ++i) {
     Grain g;
@@ -190,4 +199,19 @@ TEST(SimulationLoop, ResultsDoNotDependOnThreads) {
     EXPECT_EQ(a.grains[i].position, b.grains[i].position);
     EXPECT_EQ(a.grains[i].strength.values, b.grains[i].strength.values);
   }
+}
+
+// summary.json time_breakdown_s: fragment building has its own entry, apart from the
+// analyses (they run in one parallel loop; its wall time is split by what each task measured).
+TEST(SimulationLoop, FragmentBuildingIsTimedApartFromAnalyses) {
+  // 8 builds of 30 ms, analyses instant: ≥ 0.24 s under fragments, analyses near 0.
+  const Outcome slow_build = run_with(1, 0, false, 0, 0.03);
+  ASSERT_EQ(slow_build.sum.breakage_events, 8);
+  EXPECT_GE(slow_build.sum.timings.fragments, 8 * 0.03);
+  EXPECT_LT(slow_build.sum.timings.analyses, 0.3 * slow_build.sum.timings.fragments);
+  // Slow analyses (every screened grain, ≥ 8 of them), instant building: the other way round.
+  const Outcome slow_model = run_with(1, 0, false, 0.03, 0);
+  ASSERT_EQ(slow_model.sum.breakage_events, 8);
+  EXPECT_GE(slow_model.sum.timings.analyses, 8 * 0.03);
+  EXPECT_LT(slow_model.sum.timings.fragments, 0.3 * slow_model.sum.timings.analyses);
 }

@@ -1,0 +1,244 @@
+// `crumble compare` end to end: one packing for every combination (same SHA-256 in every
+// summary.json, same initial grains and void ratio), one folder and one table row per
+// combination, a guard failure as a row (exit 1), bad --vary input refused (exit 2) before
+// anything runs; and the pieces it is made of (--vary parsing, SHA-256).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "crumble_config.h"
+#include "scenarios/Compare.h"
+#include "scenarios/RunPipeline.h"
+#include "scenarios/Writers.h"
+#include "tests/support/CliRunner.h"
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using crumble::testing_support::run_cli;
+using crumble::testing_support::slurp;
+
+namespace {
+
+// 10 spheres settled under 10 kPa, loaded to 2 MPa; soft lsdem contacts and mass scaling
+// keep it to a few seconds per run.
+const char* kTiny = R"({
+  "name": "compare_tiny", "dimension": 3, "seed": 3,
+  "engine": {"type": "lsdem", "mass_scale": 100, "kn": 2e5},
+  "breakage": {"type": "stress", "criterion": "von_mises", "weibull": false, "strength": 15e6},
+  "fragments": {"type": "level_set"},
+  "container": {"lx": 0.005, "ly": 0.005},
+  "packing": {"type": "cloud", "count": 10, "psd": [[0.0015, 0], [0.002, 1]], "shape": {"type": "sphere"},
+              "settle": {"stress": 1e4, "max_time": 0.02}},
+  "loading": {"mode": "stress_ramp", "max_stress": 2e6, "ramp_time": 0.01},
+  "time_step": 5e-5,
+  "output": {"psd_at_stress": [1e6, 2e6], "vtk_final": false, "shape_metrics": false}
+})";
+
+fs::path test_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path d = fs::temp_directory_path() / "crumble_compare_test" / info->name();
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string scenario(const fs::path& dir) {
+  const fs::path f = dir / "tiny.json";
+  std::ofstream(f) << kTiny;
+  return f.string();
+}
+
+void expect_bad(const std::string& args, const fs::path& out, const std::vector<std::string>& needles) {
+  const auto r = run_cli(args + " --out " + out.string());
+  EXPECT_EQ(r.status, 2) << args << "\n" << r.output;
+  for (const auto& n : needles) EXPECT_NE(r.output.find(n), std::string::npos) << "'" << n << "' not in:\n" << r.output;
+  // Checked before anything runs: no folder, no packing.
+  EXPECT_FALSE(fs::exists(out / "packing.json")) << args;
+  EXPECT_FALSE(fs::exists(out / "logs")) << args;
+}
+
+}  // namespace
+
+TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
+#if CRUMBLE_WITH_BULLET
+  const std::string engines = "lsdem,bullet";
+#else
+  const std::string engines = "lsdem";
+#endif
+  const fs::path dir = test_dir();
+  const fs::path out = dir / "out";
+  const auto r = run_cli("compare " + scenario(dir) + " --out " + out.string() + " --vary engine.type=" + engines +
+                         " --vary breakage.type=none,stress --threads 1 --quiet");
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  const std::string hash = crumble::file_sha256((out / "packing.json").string());
+  ASSERT_EQ(hash.size(), 64u);
+  std::vector<std::string> folders;
+  for (const auto& e : {std::string("lsdem"), std::string("bullet")}) {
+    if (engines.find(e) == std::string::npos) continue;
+    for (const char* m : {"none", "stress"}) folders.push_back("engine.type=" + e + "__breakage.type=" + m);
+  }
+  double e0 = -1;
+  for (const auto& f : folders) {
+    SCOPED_TRACE(f);
+    ASSERT_TRUE(fs::exists(out / f / "summary.json"));
+    const Json s = Json::parse(slurp(out / f / "summary.json"));
+    // The identical packing: the same bytes, grains and (container height, solid volume) e0.
+    EXPECT_EQ(s.at("packing_hash").get<std::string>(), hash);
+    EXPECT_EQ(s.at("grains_initial").get<int>(), 10);
+    if (e0 < 0) e0 = s.at("void_ratio_initial").get<double>();
+    EXPECT_NEAR(s.at("void_ratio_initial").get<double>(), e0, 1e-9 * e0);
+    // Loaded, not re-settled.
+    EXPECT_EQ(s.at("packing_settle_steps").get<double>(), 0.0);
+    const Json eff = Json::parse(slurp(out / f / "effective_scenario.json"));
+    EXPECT_EQ(eff["packing"]["type"], "file");
+    // Fragment building has its own entry in where the time went.
+    EXPECT_TRUE(s.at("time_breakdown_s").contains("fragments"));
+    EXPECT_TRUE(s.contains("psd_d50_final_m"));
+    EXPECT_TRUE(s.contains("void_ratio_at_stress_1e+06_Pa"));
+    // No breakage with breakage.type none; the mass budget holds either way.
+    if (f.find("none") != std::string::npos) EXPECT_EQ(s.at("breakage_events").get<int>(), 0);
+    EXPECT_NEAR(s.at("mass_final_kg").get<double>() + s.at("mass_removed_kg").get<double>(),
+                s.at("mass_initial_kg").get<double>(), 1e-12 * s.at("mass_initial_kg").get<double>());
+  }
+  // The packing stage ran once and its packing.json is the one shared.
+  EXPECT_EQ(crumble::file_sha256((out / "packing" / "packing.json").string()), hash);
+
+  // comparison.csv: a header and one row per combination, in order, status ok, the hash.
+  const auto rows = crumble::read_csv((out / "comparison.csv").string());
+  ASSERT_EQ(rows.size(), folders.size() + 1);
+  const auto& h = rows[0];
+  auto col = [&](const std::string& name) {
+    for (std::size_t i = 0; i < h.size(); ++i)
+      if (h[i] == name) return i;
+    ADD_FAILURE() << "no column " << name;
+    return std::size_t(0);
+  };
+  EXPECT_EQ(h[0], "engine.type");
+  EXPECT_EQ(h[1], "breakage.type");
+  for (std::size_t i = 0; i < folders.size(); ++i) {
+    const auto& row = rows[i + 1];
+    ASSERT_EQ(row.size(), h.size());
+    EXPECT_EQ(row[col("folder")], folders[i]);
+    EXPECT_EQ(row[col("status")], "ok");
+    EXPECT_EQ(row[col("packing_hash")], hash);
+    EXPECT_EQ(row[col("grains_initial")], "10");
+    EXPECT_FALSE(row[col("wall_seconds")].empty());
+    EXPECT_FALSE(row[col("time_fragments_s")].empty());
+    EXPECT_FALSE(row[col("void_ratio_at_stress_1e+06_Pa")].empty());
+  }
+  col("void_ratio_at_stress_2e+06_Pa");  // a column for every reported level
+  // comparison.md: one table line per combination.
+  const std::string md = slurp(out / "comparison.md");
+  EXPECT_NE(md.find(hash), std::string::npos);
+  for (const auto& f : folders) {
+    const std::string e = f.substr(12, f.find("__") - 12), m = f.substr(f.rfind('=') + 1);
+    EXPECT_NE(md.find("| " + e + " | " + m + " | ok |"), std::string::npos) << md;
+  }
+  // The table is rebuilt from the summaries alone (resumed or other runs too): the same rows.
+  std::vector<crumble::ComparisonRow> again;
+  std::vector<crumble::VaryAxis> axes = {crumble::parse_vary("engine.type=" + engines),
+                                         crumble::parse_vary("breakage.type=none,stress")};
+  for (const auto& c : crumble::combinations(axes)) {
+    crumble::ComparisonRow row;
+    row.combination = c;
+    row.status = "ok";
+    row.exit_status = 0;
+    row.summary = Json::parse(slurp(out / c.name / "summary.json"));
+    again.push_back(row);
+  }
+  const fs::path copy = dir / "again";
+  fs::create_directories(copy);
+  crumble::write_comparison(copy.string(), axes, again, {"void_ratio_at_stress_2e+06_Pa"}, {});
+  EXPECT_EQ(slurp(copy / "comparison.csv"), slurp(out / "comparison.csv"));
+
+  // A second compare into the same folder is refused (exit 2) unless --force.
+  const auto again_r = run_cli("compare " + scenario(dir) + " --out " + out.string() +
+                               " --vary engine.type=lsdem --threads 1 --quiet");
+  EXPECT_EQ(again_r.status, 2) << again_r.output;
+  EXPECT_NE(again_r.output.find("not empty"), std::string::npos) << again_r.output;
+}
+
+TEST(Compare, AGuardFailureIsARowNotAnAbort) {
+  const fs::path dir = test_dir();
+  const fs::path out = dir / "out";
+  // The second value stops its run at the overlap guard (exit 1); the first still runs.
+  const auto r = run_cli("compare " + scenario(dir) + " --out " + out.string() +
+                         " --vary simulation.guards.max_overlap_fraction=0.5,0.001 --set breakage.type=none"
+                         " --threads 1 --quiet --jobs 2");
+  EXPECT_EQ(r.status, 1) << r.output;
+  const auto rows = crumble::read_csv((out / "comparison.csv").string());
+  ASSERT_EQ(rows.size(), 3u) << slurp(out / "comparison.csv");
+  EXPECT_EQ(rows[1][0], "0.5");
+  EXPECT_EQ(rows[1][2], "ok");
+  EXPECT_EQ(rows[2][0], "0.001");
+  EXPECT_EQ(rows[2][2], "failed");
+  EXPECT_EQ(rows[2][3], "1");
+  const std::string csv = slurp(out / "comparison.csv");
+  EXPECT_NE(csv.find("max_overlap_fraction"), std::string::npos);
+  EXPECT_NE(slurp(out / "comparison.md").find("physical guard"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "simulation.guards.max_overlap_fraction=0.5" / "summary.json"));
+  EXPECT_FALSE(fs::exists(out / "simulation.guards.max_overlap_fraction=0.001" / "summary.json"));
+}
+
+TEST(Compare, BadVaryIsExit2BeforeAnythingRuns) {
+  const fs::path dir = test_dir();
+  const std::string sc = scenario(dir);
+  const fs::path out = dir / "out";
+  expect_bad("compare " + sc + " --vary engine.type=lsdem,warp", out,
+             {"engine.type=warp", "/engine/type", "unknown engine 'warp'", "lsdem"});
+  expect_bad("compare " + sc + " --vary breakage.criterion=von_mises,bogus", out,
+             {"/breakage/criterion", "max_principal, von_mises, tresca"});
+  expect_bad("compare " + sc + " --vary engine.type=", out, {"--vary engine.type=", "empty value list"});
+  expect_bad("compare " + sc + " --vary engine.type=lsdem,,lsdem", out, {"value 2 of 3 is empty"});
+  expect_bad("compare " + sc + " --vary engine.type=lsdem,lsdem", out, {"'lsdem' is given twice"});
+  expect_bad("compare " + sc + " --vary engine.type=lsdem --vary engine.type=bullet", out,
+             {"'engine.type' is varied twice"});
+  expect_bad("compare " + sc + " --vary engine.type", out, {"--vary engine.type", "expected path=value1,value2"});
+  expect_bad("compare " + sc + " --vary =lsdem", out, {"empty path"});
+  expect_bad("compare " + sc + " --vary engine..type=lsdem", out, {"empty component"});
+  expect_bad("compare " + sc + " --vary packing.count=5,10", out, {"'packing.count' cannot vary"});
+  expect_bad("compare " + sc + " --vary engine.type=lsdem --set engine.type=lsdem", out,
+             {"also given by --set engine.type=lsdem"});
+  expect_bad("compare " + sc + " --vary loading.max_stress=1e6,-1", out,
+             {"loading.max_stress=-1", "/loading/max_stress"});
+  // Without --vary: a usage error.
+  EXPECT_EQ(run_cli("compare " + sc + " --out " + out.string()).status, 2);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Compare, VaryParsing) {
+  const auto a = crumble::parse_vary("output.psd_at_stress=[1e6,2e6], [3e6]");
+  ASSERT_EQ(a.values.size(), 2u);
+  EXPECT_EQ(a.values[0], "[1e6,2e6]");
+  EXPECT_EQ(a.values[1], "[3e6]");
+  EXPECT_EQ(a.path, "output.psd_at_stress");
+  const auto b = crumble::parse_vary("name=\"a,b\",c");
+  ASSERT_EQ(b.values.size(), 2u);
+  EXPECT_EQ(b.values[0], "\"a,b\"");
+  const auto combos = crumble::combinations({crumble::parse_vary("engine.type=lsdem,bullet"),
+                                             crumble::parse_vary("breakage.criterion=tresca,von_mises")});
+  ASSERT_EQ(combos.size(), 4u);
+  EXPECT_EQ(combos[0].name, "engine.type=lsdem__breakage.criterion=tresca");
+  EXPECT_EQ(combos[1].name, "engine.type=lsdem__breakage.criterion=von_mises");
+  EXPECT_EQ(combos[3].name, "engine.type=bullet__breakage.criterion=von_mises");
+  EXPECT_EQ(crumble::sanitise_folder_name("a.b=[1 ,2]/x"), "a.b=_1__2__x");
+  // Two values that sanitise to the same folder are refused.
+  EXPECT_THROW(crumble::combinations({crumble::parse_vary("name=a/b,a:b")}), crumble::InputError);
+}
+
+TEST(Compare, Sha256KnownVectors) {
+  // FIPS 180-4 examples.
+  EXPECT_EQ(crumble::sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(crumble::sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(crumble::sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");  // two blocks (sha256sum)
+  EXPECT_EQ(crumble::sha256_hex(std::string(1000000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
