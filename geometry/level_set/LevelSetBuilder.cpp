@@ -1,5 +1,6 @@
 #include "geometry/level_set/LevelSetBuilder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
@@ -45,6 +46,32 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
       },
       fracture);
   if (sr.missed) {
+    // Harmon et al. 2020 §3.4: grains of the size of the discretisation are unstable and are
+    // removed. A grain under 3 cells thick (its deepest point less than 1.5 cells inside)
+    // whose cut runs through it (parent surface nodes more than a quarter cell on both sides
+    // of a plane) but that its grid cannot separate is such a grain: it is crushed, all of
+    // it removed as fines (counted as removed mass). A cut that misses the grain stays a
+    // no_split.
+    const auto* cs = std::get_if<CuttingSurfaces>(&fracture);
+    const double h = phi1.spacing();
+    const double depth = -*std::min_element(phi1.values().begin(), phi1.values().end());
+    bool through = false;
+    if (cs && depth < 1.5 * std::max(1.0, opt_.min_thickness_cells) * h)
+      for (const auto& p : cs->planes) {
+        bool neg = false, pos = false;
+        for (const auto& x : phi1.nodes()) {
+          const double f = dot(p.normal, x) - p.offset;
+          neg = neg || f < -0.25 * h;
+          pos = pos || f > 0.25 * h;
+        }
+        through = through || (neg && pos);
+      }
+    if (through) {
+      out.method = "level_set_unresolved";
+      out.removed_volume = V;
+      out.fallbacks = 1;
+      return out;
+    }
     out.method = "no_split";
     return out;
   }
