@@ -1,9 +1,9 @@
 // crumble: the command line.
 //   crumble run SCENARIO --out DIR [--set path=value]... [--seed N] [--threads N]
 //   crumble validate SCENARIO [--set path=value]... [--print]
-//   crumble list
+//   crumble list [--options NAME [--markdown]]
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
-//   crumble bench pd-kernel|lsdem ...
+//   crumble bench engine|pd-kernel|lsdem ...
 //   crumble --plugin lib.so <subcommand> ...   (out-of-tree engines, models, builders)
 // Exit status: 0 success, 2 bad input (scenario, option, mesh, output folder), 1 failure while
 // running, 130 / 143 a run ended early by SIGINT / SIGTERM (every output written).
@@ -22,6 +22,7 @@
 #include "crumble_config.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
+#include "scenarios/OptionDocs.h"
 #include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
@@ -316,7 +317,25 @@ void list_table(const char* title, const T& t) {
       for (const auto& v : e.variants) std::cout << " " << v;
     }
     std::cout << "\n";
+    if (!e.options.empty()) {
+      std::cout << "      options (" << e.options.size() << "):";
+      for (std::size_t i = 0; i < e.options.size(); ++i) std::cout << (i ? ", " : " ") << e.options[i].key;
+      std::cout << "\n";
+    }
   }
+}
+
+// `crumble list --options NAME [--markdown]`: the option table NAME declares (the Markdown
+// form is the one docs/scenarios.md holds between its markers).
+int cmd_list_options(const std::string& name, bool markdown) {
+  for (const auto& n : find_options(name, "--options " + name)) {
+    if (markdown) {
+      std::cout << option_table_markdown(*n.options);
+    } else {
+      std::cout << n.name << " (" << n.seam << "): " << n.description << "\n" << option_table_text(*n.options);
+    }
+  }
+  return 0;
 }
 
 int cmd_list() {
@@ -329,6 +348,7 @@ int cmd_list() {
   }
   const auto why = not_compiled_reason("fragment builder", "alpha_shape");
   if (!why.empty()) std::cout << "  (fragment builder alpha_shape not available: " << why << ")\n";
+  std::cout << "crumble list --options NAME: each option's type, default, range and meaning\n";
   return 0;
 }
 
@@ -348,7 +368,8 @@ int main(int argc, char** argv) {
   std::optional<int> threads;
   bool quiet = false, print = false, resume = false, force = false;
   double spacing = 0;
-  long nodes = 0, bench_steps = 1000;
+  long nodes = 0, bench_steps = 1000, bench_settle = -1;
+  std::string bench_engine;
   int bench_threads = 1;
 
   auto* run = app.add_subcommand("run", "run a scenario");
@@ -371,6 +392,11 @@ int main(int argc, char** argv) {
   val->add_flag("--print", print, "print the effective scenario (all defaults filled in)");
 
   auto* lst = app.add_subcommand("list", "registered engines, breakage models and criteria, fragment builders");
+  std::string list_options;
+  bool list_markdown = false;
+  lst->add_option("--options", list_options,
+                  "print the options one implementation declares (key, type, default, range, meaning), e.g. lsdem");
+  lst->add_flag("--markdown", list_markdown, "with --options: as the Markdown table of docs/scenarios.md");
 
   auto* shp = app.add_subcommand("shape", "report how well a shape is resolved by a representation");
   shp->add_option("--json", shape_spec, "shape JSON (inline text, or a file name)")->required();
@@ -380,10 +406,14 @@ int main(int argc, char** argv) {
   shp->add_option("--nodes", nodes, "level-set surface nodes");
 
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON line on stdout)");
-  bench->add_option("what", bench_what, "pd-kernel | lsdem")->required();
+  bench->add_option("what", bench_what, "engine | pd-kernel | lsdem")->required();
   bench->add_option("--steps", bench_steps, "steps")->check(CLI::Range(1L, 100000000L));
   bench->add_option("--threads", bench_threads, "threads")->check(CLI::Range(1, 1024));
-  bench->add_option("--scenario", bench_scenario, "scenario file (lsdem)");
+  bench->add_option("--scenario", bench_scenario,
+                    "scenario file (lsdem; engine: default scenarios/oedometer_rigid_quick.json)");
+  bench->add_option("--engine", bench_engine, "engine for `bench engine` (bullet, ode, lsdem, ...)");
+  bench->add_option("--settle-steps", bench_settle, "engine: steps the placed grains fall before timing (default: settle them as the scenario's packing does)")
+      ->check(CLI::Range(-1L, 100000000L));
 
   try {
     app.parse(argc, argv);
@@ -398,13 +428,16 @@ int main(int argc, char** argv) {
     for (const auto& p : plugins) load_plugin(p);
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*val) return cmd_validate(file, sets, print);
-    if (*lst) return cmd_list();
+    if (*lst) {
+      if (list_markdown && list_options.empty()) throw InputError("list --markdown needs --options NAME");
+      return list_options.empty() ? cmd_list() : cmd_list_options(list_options, list_markdown);
+    }
     if (*shp) {
       std::cout << shape_report(shape_spec, repr, spacing, nodes).dump() << "\n";
       return 0;
     }
     if (*bench) {
-      std::cout << run_benchmark(bench_what, bench_steps, bench_threads, bench_scenario).dump() << "\n";
+      std::cout << run_benchmark(bench_what, bench_steps, bench_threads, bench_scenario, bench_engine, bench_settle).dump() << "\n";
       return 0;
     }
   } catch (const ConfigError& e) {

@@ -6,6 +6,12 @@
 //
 // loaded with `crumble --plugin path.so ...`. A library built against another ABI version
 // is refused with a clear error before any of its code registers anything.
+//
+// A plugin's entries declare their options like the built-in ones (RegistryEntry::options,
+// read through crumble::Options; `crumble list --options NAME` shows them). An entry with an
+// empty table reads its section free-form through Config as before: its keys are still
+// checked (a key it does not read is an error), but `crumble list --options` shows none and
+// they are not accepted while another implementation of the seam is selected.
 #pragma once
 #include <string>
 
@@ -15,7 +21,9 @@ namespace crumble {
 
 // Bumped whenever a seam interface (core/Engine.h, BreakageModel.h, FragmentBuilder.h,
 // Observer.h) or the registrar changes.
-inline constexpr int kPluginAbi = 2;  // 2: BreakageAnalysis, named strength values, model-owned screening
+// 2: BreakageAnalysis, named strength values, model-owned screening.
+// 3: RegistryEntry::options (core/Options.h), the implementation's declared option table.
+inline constexpr int kPluginAbi = 3;
 
 struct PluginRegistrar {
   Table<EngineFactory>& engines;

@@ -52,15 +52,18 @@ Table<EngineFactory>& engines() {
   static Table<EngineFactory> t = [] {
     Table<EngineFactory> t("engine");
     t.add({"lsdem", "in-house level-set DEM (Harmon et al. 2020 §2), explicit, 2D and 3D",
-           [](const Config& c, const EngineContext& ctx) { return make_lsdem_engine(c, ctx); }, {}, {2, 3}});
+           [](const Config& c, const EngineContext& ctx) { return make_lsdem_engine(c, ctx); }, {}, {2, 3},
+           lsdem_options()});
 #if CRUMBLE_WITH_BULLET
     t.add({"bullet", "Bullet 3 rigid bodies, projected Gauss-Seidel contact dynamics (Zhu & Zhao 2019)",
-           [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3}});
+           [](const Config& c, const EngineContext& ctx) { return make_bullet_engine(c, ctx); }, {}, {3},
+           bullet_options()});
 #endif
 #if CRUMBLE_WITH_ODE
     t.add({"ode", "Open Dynamics Engine 0.16 rigid bodies, QuickStep (projected SOR) contact dynamics, Coulomb "
                   "friction (dContactApprox1)",
-           [](const Config& c, const EngineContext& ctx) { return make_ode_engine(c, ctx); }, {}, {3}});
+           [](const Config& c, const EngineContext& ctx) { return make_ode_engine(c, ctx); }, {}, {3},
+           ode_options()});
 #endif
     return t;
   }();
@@ -71,11 +74,12 @@ Table<ModelFactory>& breakage_models() {
   static Table<ModelFactory> t = [] {
     Table<ModelFactory> t("breakage model");
     t.add({"none", "grains never break (rigid runs)",
-           [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}});
-    t.add({"peridynamics", "LPS peridynamics with critical-stretch bonds (Zhu & Zhao 2019)", make_peridynamics, {}, {3}});
+           [](const Config& c, const EngineContext&) { return make_no_breakage(c); }, {}, {2, 3}, {}});
+    t.add({"peridynamics", "LPS peridynamics with critical-stretch bonds (Zhu & Zhao 2019)", make_peridynamics, {}, {3},
+           peridynamics_options()});
     t.add({"stress", "average-stress criterion, Weibull strengths, planar split through the strongest contacts "
                      "(Harmon et al. 2020, eqs. 5-13, 18-20)",
-           make_stress, stress::criterion_names(), {2, 3}});
+           make_stress, stress::criterion_names(), {2, 3}, stress_options()});
     return t;
   }();
   return t;
@@ -86,15 +90,47 @@ Table<BuilderFactory>& fragment_builders() {
     Table<BuilderFactory> t("fragment builder");
 #if CRUMBLE_WITH_CGAL
     t.add({"alpha_shape", "alpha-shape polyhedra of point clusters (CGAL, Zhu & Zhao 2019 §3.2); plane cuts of the parent mesh",
-           [](const Config& c, const EngineContext& x) { return make_alpha_shape_builder(c, x); }, {}, {3}});
+           [](const Config& c, const EngineContext& x) { return make_alpha_shape_builder(c, x); }, {}, {3},
+           alpha_shape_options()});
 #endif
     t.add({"level_set",
            "level-set children: plane cuts phi3 = max(phi1, -phi2), phi4 = max(phi1, phi2) (Harmon et al. 2020, "
            "eqs. 14-15); point clusters by nearest cluster",
-           [](const Config& c, const EngineContext& x) { return make_level_set_builder(c, x); }, {}, {2, 3}});
+           [](const Config& c, const EngineContext& x) { return make_level_set_builder(c, x); }, {}, {2, 3},
+           level_set_options()});
     return t;
   }();
   return t;
+}
+
+namespace {
+template <class T>
+void collect(const char* seam, const T& table, std::vector<NamedOptions>& out) {
+  for (const auto& e : table.entries()) out.push_back({seam, e.name, e.description, &e.options});
+}
+}  // namespace
+
+std::vector<NamedOptions> registered_options() {
+  std::vector<NamedOptions> out;
+  collect("engine", engines(), out);
+  collect("breakage model", breakage_models(), out);
+  collect("fragment builder", fragment_builders(), out);
+  return out;
+}
+
+std::vector<NamedOptions> find_options(const std::string& name, const std::string& where) {
+  std::vector<NamedOptions> found;
+  std::string known;
+  for (auto& n : registered_options()) {
+    known += (known.empty() ? "" : ", ") + n.name;
+    if (n.name == name) found.push_back(n);
+  }
+  if (!found.empty()) return found;
+  for (const char* seam : {"engine", "fragment builder"}) {
+    const std::string why = not_compiled_reason(seam, name);
+    if (!why.empty()) throw ConfigError(where, "'" + name + "' is not available in this build: " + why);
+  }
+  throw ConfigError(where, "unknown implementation '" + name + "'; known: " + known);
 }
 
 std::string not_compiled_reason(const std::string& seam, const std::string& name) {

@@ -10,6 +10,7 @@
 #include "core/BreakageModel.h"
 #include "core/Config.h"
 #include "core/Engine.h"
+#include "core/Options.h"
 #include "core/FragmentBuilder.h"
 
 namespace crumble {
@@ -25,6 +26,12 @@ struct RegistryEntry {
   Factory make;
   std::vector<std::string> variants;  // e.g. the criteria of the stress model
   std::vector<int> dimensions{3};     // which scenario dimensions it supports
+  // Its options, declared once (core/Options.h): read by the implementation, by the
+  // scenario factory (a sibling's keys are accepted with a note), by `crumble list
+  // --options NAME` and by the generated tables of docs/scenarios.md. Empty: the entry
+  // declares none (`none`), or a plugin reads its section free-form through Config; either
+  // way no key of it is accepted while another implementation is selected.
+  OptionTable options;
 };
 
 template <class Factory>
@@ -45,6 +52,17 @@ class Table {
 Table<EngineFactory>& engines();
 Table<ModelFactory>& breakage_models();
 Table<BuilderFactory>& fragment_builders();
+
+// The registered implementations (of any seam) called `name`, each as "seam: table".
+struct NamedOptions {
+  std::string seam;  // "engine", "breakage model", "fragment builder"
+  std::string name;
+  std::string description;
+  const OptionTable* options;
+};
+std::vector<NamedOptions> registered_options();
+// Throws ConfigError at `where` listing every registered name when `name` is unknown.
+std::vector<NamedOptions> find_options(const std::string& name, const std::string& where);
 
 // Names known to the design but not compiled into this binary, with the reason
 // (e.g. "bullet: built with CRUMBLE_WITH_BULLET=OFF"), so the error can say so.

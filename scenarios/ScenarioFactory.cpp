@@ -1,7 +1,9 @@
 #include "scenarios/ScenarioFactory.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -68,31 +70,42 @@ std::vector<TimeStepRule> time_steps_from(const Config& root) {
 }
 
 // A scenario switched to another implementation with `--set engine.type=lsdem` still
-// carries the options of the one it was written for. Keys that another registered
-// implementation of the same seam reads are accepted (with a note on stderr); keys that no
-// implementation reads remain errors, so typos are still caught.
+// carries the options of the one it was written for. A key that another registered
+// implementation of the same seam declares (RegistryEntry::options) is accepted with a note
+// when its value is valid for that implementation (a wrong type or range is an error naming
+// the path and the range); a key that no implementation declares stays unknown, so typos
+// are still caught. Only the tables are read: no sibling is constructed (validating an
+// lsdem scenario builds no Bullet world).
 template <class T>
 void accept_sibling_options(const Config& section, const T& table, const std::string& active,
-                            const EngineContext& ctx, std::vector<std::string>& notes) {
+                            std::vector<std::string>& notes) {
   const std::set<std::string> used = section.read_keys();
-  for (const auto& e : table.entries()) {
-    if (e.name == active) continue;
-    nlohmann::json copy = section.doc();
-    copy["type"] = e.name;
-    std::set<std::string> keys;
-    try {
-      Config tmp(copy);
-      e.make(tmp, ctx);
-      keys = tmp.read_keys();
-    } catch (const std::exception&) {
-      // Invalid for that implementation: its keys are not learnt, the real check decides.
-      continue;
-    }
-    for (auto it = section.doc().begin(); it != section.doc().end(); ++it)
-      if (!used.count(it.key()) && keys.count(it.key())) {
-        section.accept(it.key());
-        notes.push_back(section.path() + "/" + it.key() + " is an option of '" + e.name + "', ignored by '" + active + "'");
+  for (auto it = section.doc().begin(); it != section.doc().end(); ++it) {
+    if (used.count(it.key())) continue;
+    std::string owners;
+    std::optional<ConfigError> invalid;
+    for (const auto& e : table.entries()) {
+      if (e.name == active) continue;
+      for (const auto& spec : e.options) {
+        if (spec.key != it.key()) continue;
+        nlohmann::json one = nlohmann::json::object({{it.key(), it.value()}});
+        try {
+          check_option(Config(one), spec);
+          owners += (owners.empty() ? "'" : "' and '") + e.name;
+        } catch (const ConfigError& err) {
+          const std::string what = err.what(), msg = what.substr(std::min(what.size(), err.path().size() + 2));
+          if (!invalid)
+            invalid.emplace(section.path() + err.path(),
+                            msg + " (an option of '" + e.name + "', ignored by '" + active + "')");
+        }
       }
+    }
+    if (owners.empty()) {
+      if (invalid) throw *invalid;
+      continue;  // declared by no implementation: check_unknown() reports it
+    }
+    section.accept(it.key());
+    notes.push_back(section.path() + "/" + it.key() + " is an option of " + owners + "', ignored by '" + active + "'");
   }
 }
 
@@ -199,9 +212,9 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     }
   }
   auto model = bentry.make(bc, ctx);
-  accept_sibling_options(ec, engines(), et, ctx, sc.notes);
-  accept_sibling_options(bc, breakage_models(), bt, ctx, sc.notes);
-  if (builder) accept_sibling_options(root.child("fragments"), fragment_builders(), ft, ctx, sc.notes);
+  accept_sibling_options(ec, engines(), et, sc.notes);
+  accept_sibling_options(bc, breakage_models(), bt, sc.notes);
+  if (builder) accept_sibling_options(root.child("fragments"), fragment_builders(), ft, sc.notes);
   sc.engine_name = et;
   sc.breakage_name = bt;
   sc.fragments_name = ft;

@@ -5,7 +5,20 @@
 #include <iomanip>
 #include <sstream>
 
+#include <chrono>
+
+#include "crumble_config.h"
+
 #include "backends/lsdem/LsdemEngine.h"
+#if CRUMBLE_WITH_BULLET
+#include "backends/bullet/BulletEngine.h"
+#include "backends/bullet/RawBulletBench.h"
+#endif
+#if CRUMBLE_WITH_ODE
+#include "backends/ode/OdeEngine.h"
+#include "backends/ode/RawOdeBench.h"
+#endif
+#include "core/RawScene.h"
 #include "breakage/peridynamics/Peridynamics.h"
 #include "core/Analysis.h"
 #include "scenarios/Packing.h"
@@ -13,6 +26,7 @@
 #include "geometry/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
+#include "scenarios/Registry.h"
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Writers.h"
 
@@ -264,9 +278,157 @@ Json bench_lsdem(long steps, int threads, const std::string& file) {
   return j;
 }
 
+
+// The grains of a simulation as library-neutral rigid bodies (SI), for the raw baselines.
+RawScene raw_scene_of(const Simulation& sim, const Container& box, double dt) {
+  RawScene r;
+  const auto& mats = sim.context().materials;
+  for (const Grain& g : sim.grains()) {
+    const Material& m = mats[g.material];
+    const MassProperties& mp = g.shape->mass_properties();
+    RawBody b;
+    b.hull = g.shape->convex_hull();
+    b.hull.translate(Vec3{} - mp.centroid);
+    b.mass = m.density * mp.volume;
+    b.inertia = mp.inertia * m.density;
+    const Quat q = g.orientation.normalized();
+    b.com = g.position + q.rotate(mp.centroid);
+    b.orientation = q;
+    b.velocity = g.velocity;
+    b.angular_velocity = g.angular_velocity;
+    b.friction = m.friction;
+    b.rolling_friction = m.rolling_friction;
+    r.bodies.push_back(std::move(b));
+  }
+  r.lx = box.lx;
+  r.ly = box.ly;
+  r.platen_z = sim.engine().platen_position();
+  r.wall_friction = mats.empty() ? 0 : mats.front().wall_friction;
+  r.gravity = sim.context().gravity;
+  r.dt = dt;
+  return r;
+}
+
+// `crumble bench engine --engine E [--scenario F]`: the scenario's packing (placed, not
+// settled) on engine E; `settle` steps let the grains fall into contact, then `steps` steps
+// are timed through the adapter (Engine::step, and separately the read-out the Simulation
+// does: read_state + contacts) and, for bullet and ode, through the raw library on the same
+// bodies from the same state (RawBulletBench / RawOdeBench). The adapter runs with the raw
+// baseline's solver settings (fixed iterations: Bullet's tolerance exit off; ODE one point
+// per pair), so both do the same solver work.
+Json bench_engine(const std::string& engine, long steps, long settle, int threads, const std::string& file_in) {
+  const std::string file = file_in.empty() ? "scenarios/oedometer_rigid_quick.json" : file_in;
+  Json doc = load_scenario_file(file);
+  if (!doc.contains("engine") || !doc["engine"].is_object()) doc["engine"] = Json::object();
+  const Json scenario_engine = doc["engine"];
+  doc["engine"]["type"] = engine;
+  if (engine == "bullet") {
+    doc["engine"]["solver_tolerance"] = 0;
+    doc["engine"]["solver_residual"] = 0;
+  } else if (engine == "ode") {
+    doc["engine"]["contacts_per_pair"] = 1;
+  }
+  BuildOptions opt;
+  opt.threads = threads;
+  opt.source_name = file;
+  Scenario sc = build_scenario(doc, opt);
+  if (sc.sim->context().dimension != 3 && engine != "lsdem")
+    throw ConfigError(file + ": /dimension", "bench engine compares 3D scenes");
+  // settle < 0: the scenario's own packing procedure (settled under the platen, as `run`
+  // does); otherwise the grains are placed and fall for `settle` steps.
+  if (settle >= 0) sc.packing.settle = false;
+  const auto t_settle = std::chrono::steady_clock::now();
+  build_packing(*sc.sim, sc.packing);
+  Engine& eng = sc.sim->engine();
+  const double dt = std::min(sc.sim->settings().time_steps.front().dt, eng.max_stable_dt());
+  eng.set_platen(PlatenCommand{});
+  for (long k = 0; k < settle; ++k) eng.step(dt);
+  const double settle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_settle).count();
+  sc.sim->sync_grains();
+  RawScene raw = raw_scene_of(*sc.sim, sc.sim->container(), dt);
+
+  // The raw world gets the adapter's solver settings and length scale; both start from
+  // this state and are stepped alternately, so the machine's load falls on both alike.
+  std::unique_ptr<RawWorld> raw_world;
+#if CRUMBLE_WITH_BULLET
+  if (auto* b = dynamic_cast<BulletEngine*>(&eng)) {
+    Json ec = sc.effective["engine"];
+    const auto o = BulletEngine::read_options(Config(ec));
+    raw.solver_iterations = o.solver_iterations;
+    raw.erp = o.erp;
+    raw.mass_scale = o.mass_scale;
+    raw.margin_fraction = o.margin_fraction;
+    raw.length_scale = b->length_scale();
+    raw_world = make_raw_bullet_world(raw);
+  }
+#endif
+#if CRUMBLE_WITH_ODE
+  if (auto* o = dynamic_cast<OdeEngine*>(&eng)) {
+    Json ec = sc.effective["engine"];
+    const auto op = OdeEngine::read_options(Config(ec));
+    raw.solver_iterations = op.solver_iterations;
+    raw.erp = op.erp;
+    raw.mass_scale = op.mass_scale;
+    raw.contacts_per_pair = op.contacts_per_pair;
+    raw.length_scale = o->length_scale();
+    raw_world = make_raw_ode_world(raw);
+  }
+#endif
+  using clock = std::chrono::steady_clock;
+  auto seconds = [](clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
+  double t_step = 0, t_read = 0, t_raw = 0, contacts = 0, raw_contacts = 0;
+  std::vector<Grain> grains = sc.sim->grains();
+  for (long k = 0; k < steps; ++k) {
+    const auto a = clock::now();
+    eng.step(dt);
+    const auto b = clock::now();
+    eng.read_state(grains);
+    contacts += static_cast<double>(eng.contacts().size());
+    const auto c = clock::now();
+    t_step += seconds(a, b);
+    t_read += seconds(b, c);
+    if (raw_world) {
+      const auto d = clock::now();
+      raw_world->step();
+      t_raw += seconds(d, clock::now());
+      raw_contacts += raw_world->contact_pairs();
+    }
+  }
+  Json j;
+  j["benchmark"] = "engine";
+  j["engine"] = engine;
+  j["scenario"] = file;
+  j["grains"] = sc.sim->grains().size();
+  j["threads"] = threads;
+  j["dt_s"] = dt;
+  j["settle"] = settle < 0 ? Json("scenario packing procedure") : Json(settle);
+  j["settle_wall_s"] = settle_s;
+  j["steps"] = steps;
+  j["adapter"] = {{"ms_per_step", 1e3 * t_step / steps},
+                  {"readout_ms_per_step", 1e3 * t_read / steps},
+                  {"contacts_per_step", contacts / steps}};
+  if (raw_world) {
+    const double raw_ms = 1e3 * t_raw / steps;
+    j["raw"] = {{"ms_per_step", raw_ms}, {"contacts_per_step", raw_contacts / steps}};
+    j["adapter_overhead"] = t_step / t_raw - 1;
+    j["adapter_overhead_with_readout"] = (t_step + t_read) / t_raw - 1;
+  } else {
+    j["raw"] = nullptr;
+    j["note"] = engine + " is crumble's own engine: there is no raw library to compare with";
+  }
+  return j;
+}
+
 }  // namespace
 
-Json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario) {
+Json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario,
+                   const std::string& engine, long settle_steps) {
+  if (what == "engine") {
+    if (engine.empty()) throw ConfigError("--engine", "bench engine needs --engine (known: " + engines().names() + ")");
+    engines().find(engine, "--engine");
+    return bench_engine(engine, steps, settle_steps, threads, scenario);
+  }
+  if (engine != "") throw ConfigError("--engine", "only `bench engine` takes --engine");
   if (what == "lsdem") return bench_lsdem(steps, threads, scenario);
   if (what == "pd-kernel") {
     // The LPS kernel on the lattice of LAMMPS's examples/peri cylinder (3487 points). LAMMPS
@@ -276,7 +438,7 @@ Json run_benchmark(const std::string& what, long steps, int threads, const std::
     j["benchmark"] = "pd-kernel";
     return j;
   }
-  throw ConfigError("bench " + what, "unknown benchmark; known: lsdem, pd-kernel");
+  throw ConfigError("bench " + what, "unknown benchmark; known: engine, lsdem, pd-kernel");
 }
 
 }  // namespace crumble

@@ -17,7 +17,8 @@ void attach_standard_observers(Scenario& sc, const std::string& out_dir);
 nlohmann::json shape_report(const std::string& spec, const std::string& representation, double spacing,
                             long nodes);
 
-// `crumble bench WHAT`: one JSON object.
-nlohmann::json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario);
+// `crumble bench WHAT`: engine (adapter against raw library, --engine), lsdem, pd-kernel.
+nlohmann::json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario,
+                             const std::string& engine = "", long settle_steps = -1);
 
 }  // namespace crumble

@@ -656,18 +656,39 @@ struct BulletEngine::Impl {
 
 // ------------------------------------------------------------------ BulletEngine
 
+const OptionTable& bullet_options() {
+  static const OptionTable t = [] {
+    const BulletEngine::Options d;
+    return OptionTable{
+        opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
+                    "spheres as their icosphere mesh (42 vertices, as Zhu & Zhao 2019) or \"sphere\" (exact btSphereShape)"),
+        opt::number("length_scale", d.length_scale, 0, std::numeric_limits<double>::infinity(), "",
+                    "internal units per metre; 0 = the power of two nearest 1/d of the first grain (2 mm → 512)"),
+        opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "", "collision margin / d (hulls are inset by it)"),
+        opt::integer("solver_iterations", d.solver_iterations, 1, 1000000,
+                     "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
+        opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
+                    "stop when impulses change by at most this fraction between iterations"),
+        opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
+        opt::number("erp", d.erp, 0, 1, "", "penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
+        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (Zhu & Zhao 2019 §5 use 70)"),
+    };
+  }();
+  return t;
+}
+
 BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
   cfg.string("type", "bullet");
+  const crumble::Options r(cfg, bullet_options());
   Options o;
-  o.exact_spheres = cfg.choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"}) == "sphere";
-  o.length_scale = cfg.number("length_scale", 0, 0);
-  o.margin_fraction = cfg.positive("margin_fraction", 0.01);
-  if (o.margin_fraction > 0.1) cfg.fail("margin_fraction", "expected a number in (0, 0.1], got " + fmt_num(o.margin_fraction));
-  o.solver_iterations = static_cast<int>(cfg.integer("solver_iterations", 100, 1, 1000000));
-  o.solver_tolerance = cfg.number("solver_tolerance", 2e-4, 0, 1);
-  o.solver_residual = cfg.number("solver_residual", 0, 0, 1);
-  o.erp = cfg.number("erp", 0.003, 0, 1);
-  o.mass_scale = cfg.positive("mass_scale", 1);
+  o.exact_spheres = r.string("sphere_representation") == "sphere";
+  o.length_scale = r.number("length_scale");
+  o.margin_fraction = r.number("margin_fraction");
+  o.solver_iterations = static_cast<int>(r.integer("solver_iterations"));
+  o.solver_tolerance = r.number("solver_tolerance");
+  o.solver_residual = r.number("solver_residual");
+  o.erp = r.number("erp");
+  o.mass_scale = r.number("mass_scale");
   return o;
 }
 

@@ -46,10 +46,13 @@
 #include <memory>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 
 namespace crumble {
 
+// The options of the "engine" object (`crumble list --options bullet`).
+const OptionTable& bullet_options();
 std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx);
 
 class BulletEngine final : public Engine {

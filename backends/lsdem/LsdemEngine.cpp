@@ -820,21 +820,43 @@ void LsdemEngine::integrate(double dt) {
 
 // ---- Factory and benchmark ----
 
+const OptionTable& lsdem_options() {
+  static const OptionTable t = [] {
+    const double inf = std::numeric_limits<double>::infinity();
+    const LsdemSettings d;
+    return OptionTable{
+        opt::choice("contact_law", d.contact_law, {"linear", "hertz"},
+                    "normal force k_n·δ (\"linear\") or Hertzian (4/3)·E*·√R*·δ^(3/2) (\"hertz\", 3D only)"),
+        opt::positive("kn", d.kn, "N/m", "grain–grain normal stiffness (Harmon et al. 2020 Table 2); 2D: per metre of thickness"),
+        opt::number("ks_ratio", d.ks_ratio, 0, 10, "", "k_s / k_n (Harmon et al. 2020 Table 2)"),
+        opt::number("wall_kn", d.wall_kn, 0, inf, "N/m", "grain–wall normal stiffness; 0 = kn"),
+        opt::number("damping_ratio", d.damping_ratio, 0, 10, "", "contact critical-damping ratio ζ (Harmon et al. 2020 Table 2)"),
+        opt::number("global_damping", d.global_damping, 0, inf, "1/s", "global damping C_g (Harmon et al. 2020 Tables 1–2)"),
+        opt::number("dt_safety", d.dt_safety, 1e-6, 2, "", "stable step = dt_safety·√(m_min/k)"),
+        opt::number("hertz_reference_overlap", d.hertz_reference_overlap, 1e-9, 0.5, "",
+                    "overlap / smallest equivalent radius at which the Hertz stiffness sets the stable step"),
+        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
+    };
+  }();
+  return t;
+}
+
 std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "lsdem");
+  const Options o(cfg, lsdem_options());
   LsdemSettings s;
-  s.contact_law = cfg.choice("contact_law", s.contact_law, {"linear", "hertz"});
-  s.kn = cfg.positive("kn", s.kn);
-  s.ks_ratio = cfg.number("ks_ratio", s.ks_ratio, 0, 10);
-  s.wall_kn = cfg.number("wall_kn", s.wall_kn, 0);
-  s.damping_ratio = cfg.number("damping_ratio", s.damping_ratio, 0, 10);
-  s.global_damping = cfg.number("global_damping", s.global_damping, 0);
-  s.dt_safety = cfg.number("dt_safety", s.dt_safety, 1e-6, 2);
-  s.hertz_reference_overlap = cfg.number("hertz_reference_overlap", s.hertz_reference_overlap, 1e-9, 0.5);
-  s.mass_scale = cfg.positive("mass_scale", s.mass_scale);
+  s.contact_law = o.string("contact_law");
+  s.kn = o.number("kn");
+  s.ks_ratio = o.number("ks_ratio");
+  s.wall_kn = o.number("wall_kn");
+  s.damping_ratio = o.number("damping_ratio");
+  s.global_damping = o.number("global_damping");
+  s.dt_safety = o.number("dt_safety");
+  s.hertz_reference_overlap = o.number("hertz_reference_overlap");
+  s.mass_scale = o.number("mass_scale");
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
-    cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
+    o.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
   return std::make_unique<LsdemEngine>(s, ctx);
 }
 

@@ -51,6 +51,7 @@
 #include <vector>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 #include "core/Platen.h"
 #include "geometry/LevelSetGrid.h"
@@ -203,9 +204,9 @@ class LsdemEngine final : public Engine {
   LsdemStats stats_;
 };
 
-// Factory for the registry: cfg is the scenario's "engine" object. Keys (defaults):
-// contact_law "linear" | "hertz", kn 4e7 N/m, ks_ratio 0.6, wall_kn 0 (= kn),
-// damping_ratio 0.4, global_damping 0 1/s, dt_safety 0.1, hertz_reference_overlap 0.01, mass_scale 1.
+// The options of the "engine" object (keys, defaults, ranges: `crumble list --options lsdem`).
+const OptionTable& lsdem_options();
+// Factory for the registry: cfg is the scenario's "engine" object, read through lsdem_options().
 std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx);
 
 // The speed benchmark's scene (after YADE's examples/levelSet/discharge.py): `grains`

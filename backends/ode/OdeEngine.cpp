@@ -776,19 +776,46 @@ struct OdeEngine::Impl {
 
 // ------------------------------------------------------------------ OdeEngine
 
+const OptionTable& ode_options() {
+  static const OptionTable t = [] {
+    const double inf = std::numeric_limits<double>::infinity();
+    const OdeEngine::Options d;
+    return OptionTable{
+        opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
+                    "spheres as their icosphere hull (dConvex) or \"sphere\" (exact dSphere)"),
+        opt::number("length_scale", d.length_scale, 0, inf, "",
+                    "internal units per metre; 0 = the power of two nearest 1/d of the first grain (ODE's and libccd's "
+                    "tolerances are absolute)"),
+        opt::integer("solver_iterations", d.solver_iterations, 1, 1000000, "QuickStep SOR iterations per step"),
+        opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
+        opt::number("erp", d.erp, 0, 1, "",
+                    "contact error reduction (penetration corrected per step); ODE's default 0.2 launches grains at "
+                    "Δt ≈ 5e-5 s"),
+        opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
+        opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
+                    "cap on the velocity that pushes overlapping grains apart; 0 = none"),
+        opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
+                     "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
+                     "this many from the clipped touching faces (1 = libccd's point only)"),
+        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
+    };
+  }();
+  return t;
+}
+
 OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
   cfg.string("type", "ode");
+  const crumble::Options r(cfg, ode_options());
   Options o;
-  o.exact_spheres = cfg.choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"}) == "sphere";
-  o.length_scale = cfg.number("length_scale", 0, 0);
-  o.solver_iterations = static_cast<int>(cfg.integer("solver_iterations", 100, 1, 1000000));
-  o.sor_w = cfg.positive("sor_w", 1.0);
-  if (o.sor_w >= 2) cfg.fail("sor_w", "expected a number in (0, 2), got " + fmt_num(o.sor_w));
-  o.erp = cfg.number("erp", 0.003, 0, 1);
-  o.cfm = cfg.number("cfm", 1e-9, 0);
-  o.max_correcting_velocity = cfg.number("max_correcting_velocity", 0, 0);
-  o.contacts_per_pair = static_cast<int>(cfg.integer("contacts_per_pair", 4, 1, 16));
-  o.mass_scale = cfg.positive("mass_scale", 1);
+  o.exact_spheres = r.string("sphere_representation") == "sphere";
+  o.length_scale = r.number("length_scale");
+  o.solver_iterations = static_cast<int>(r.integer("solver_iterations"));
+  o.sor_w = r.number("sor_w");
+  o.erp = r.number("erp");
+  o.cfm = r.number("cfm");
+  o.max_correcting_velocity = r.number("max_correcting_velocity");
+  o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
+  o.mass_scale = r.number("mass_scale");
   return o;
 }
 

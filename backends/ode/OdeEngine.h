@@ -46,10 +46,13 @@
 #include <memory>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 
 namespace crumble {
 
+// The options of the "engine" object (`crumble list --options ode`).
+const OptionTable& ode_options();
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx);
 
 class OdeEngine final : public Engine {

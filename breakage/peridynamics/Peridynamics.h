@@ -44,6 +44,7 @@
 
 #include "core/BreakageModel.h"
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 
 namespace crumble {
@@ -100,7 +101,11 @@ struct PdOptions {
   double threshold_force_ref = 80.0; // "threshold_force_ref", N for G_c0 at d0
 };
 
-// Reads every key above from the scenario's "breakage" object (and marks "type").
+// The options of the "breakage" object: every key above with its default and range
+// (`crumble list --options peridynamics`).
+const OptionTable& peridynamics_options();
+// Reads every key above from the scenario's "breakage" object through peridynamics_options()
+// (and marks "type").
 PdOptions pd_options_from_config(const Config& cfg);
 // Checks ranges (std::invalid_argument naming the option).
 void validate(const PdOptions& o);

@@ -29,24 +29,68 @@ std::string joined(const std::vector<std::string>& names) {
 
 // ---------------------------------------------------------------- options
 
+// The criteria are declared once, in their own table (Criteria.cpp): the choices of
+// "criterion" and the per-criterion defaults below are read from it.
+const OptionTable& stress_options() {
+  static const OptionTable t = [] {
+    const StressOptions d;
+    std::string strengths, tensile;
+    for (const auto& c : stress::criteria()) {
+      strengths += (strengths.empty() ? "" : ", ") + c.name + " " + option_number_text(c.default_strength);
+      if (c.default_tensile_strength > 0)
+        tensile += (tensile.empty() ? "" : ", ") + c.name + " " + option_number_text(c.default_tensile_strength);
+    }
+    OptionSpec strength = opt::positive("strength", 0, "Pa",
+                                        "characteristic strength σ0 at reference_diameter (Harmon et al. 2020, "
+                                        "eqs. 11–12)");
+    strength.def = std::monostate{};
+    strength.default_doc = "per criterion (Harmon et al. 2020 Table 2): " + strengths + " Pa";
+    OptionSpec tensile_strength = opt::positive("tensile_strength", 0, "Pa",
+                                                "tensile strength (Harmon et al. 2020, eq. 8); an error with a "
+                                                "criterion without one");
+    tensile_strength.def = std::monostate{};
+    tensile_strength.default_doc = "per criterion (Table 2): " + tensile + " Pa";
+    return OptionTable{
+        opt::choice("criterion", d.criterion, stress::criterion_names(),
+                    "yield criterion of the average stress (Harmon et al. 2020 §3.1, eqs. 7–10)"),
+        strength,
+        tensile_strength,
+        opt::positive("weibull_modulus", d.weibull_modulus, "", "Weibull modulus m of eqs. 11–13 (Table 2)"),
+        opt::positive("reference_diameter", d.reference_diameter, "m",
+                      "d0 of eqs. 11–12 (Table 2: characteristic diameter d_c = 2 mm)"),
+        opt::boolean("weibull", d.weibull,
+                     "strength per grain by inverse-transform sampling (eq. 12), one variate per grain; false: σ0 "
+                     "scaled to the grain's size by eq. 13"),
+        opt::number("min_piece_fraction", d.min_piece_fraction, 0, 0.45, "",
+                    "the fracture plane is moved along its normal until each side holds at least this fraction of "
+                    "the grain (2D: area); 0 = the plane through the contacts as is (our decision, not the paper's)"),
+        opt::choice("plane_fallback", d.plane_fallback, {"centroid", "shift"},
+                    "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
+                    "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
+                    "if that fails too; shift = only shift the plane"),
+    };
+  }();
+  return t;
+}
+
 StressOptions stress_options_from_config(const Config& cfg) {
+  const Options r(cfg, stress_options());
   StressOptions o;
-  o.criterion = cfg.string("criterion", o.criterion);
+  o.criterion = r.string("criterion");
   const stress::CriterionEntry* e = stress::find_criterion(o.criterion);
-  if (!e)
-    cfg.fail("criterion", "unknown criterion '" + o.criterion + "'; known: " + joined(stress::criterion_names()));
-  o.weibull_modulus = cfg.positive("weibull_modulus", o.weibull_modulus);
-  o.reference_diameter = cfg.positive("reference_diameter", o.reference_diameter);
-  o.strength = cfg.positive("strength", e->default_strength);
+  if (!e) r.fail("criterion", "unknown criterion '" + o.criterion + "'; known: " + joined(stress::criterion_names()));
+  o.weibull_modulus = r.number("weibull_modulus");
+  o.reference_diameter = r.number("reference_diameter");
+  o.strength = r.number("strength", e->default_strength);
   if (e->default_tensile_strength > 0) {
-    o.tensile_strength = cfg.positive("tensile_strength", e->default_tensile_strength);
-  } else if (cfg.has("tensile_strength")) {
-    cfg.fail("tensile_strength", "only the max_principal criterion has a tensile strength (Harmon et al. 2020, "
-                                 "eq. 8); this scenario's criterion is '" + o.criterion + "'");
+    o.tensile_strength = r.number("tensile_strength", e->default_tensile_strength);
+  } else if (r.has("tensile_strength")) {
+    r.fail("tensile_strength", "only the max_principal criterion has a tensile strength (Harmon et al. 2020, "
+                               "eq. 8); this scenario's criterion is '" + o.criterion + "'");
   }
-  o.weibull = cfg.boolean("weibull", o.weibull);
-  o.min_piece_fraction = cfg.number("min_piece_fraction", o.min_piece_fraction, 0.0, 0.45);
-  o.plane_fallback = cfg.choice("plane_fallback", o.plane_fallback, {"centroid", "shift"});
+  o.weibull = r.boolean("weibull");
+  o.min_piece_fraction = r.number("min_piece_fraction");
+  o.plane_fallback = r.string("plane_fallback");
   return o;
 }
 

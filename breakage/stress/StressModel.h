@@ -26,6 +26,7 @@
 #include "breakage/stress/Criterion.h"
 #include "core/BreakageModel.h"
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 #include "geometry/Shape.h"
 
@@ -58,6 +59,9 @@ struct StressOptions {
 // Reads the "breakage" object (ConfigError naming the key; an unknown criterion lists the
 // known ones at /breakage/criterion).
 StressOptions stress_options_from_config(const Config& cfg);
+// The options of the "breakage" object (`crumble list --options stress`); the criterion's
+// choices and the per-criterion default strengths come from stress::criteria().
+const OptionTable& stress_options();
 
 // Average stress (eq. 5) of a grain of volume V (2D: area) under `contacts` (world frame),
 // about `centroid`, symmetrised, world frame. 2D: only the x–y block is non-zero.

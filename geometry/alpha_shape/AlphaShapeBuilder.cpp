@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -330,34 +331,54 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
   return out;
 }
 
-// Config keys of "fragments" (type "alpha_shape"), with defaults:
-//   convex_hull_diameter       0.7e-3 m   hull below this equivalent diameter (seeds/000 §3.2)
-//   convex_hull_convexity      0.85       hull when V/V_hull >= this (> 1 disables)
-//   alpha_start_spacings       2.0        walk starts at sqrt(alpha) = this × spacing
-//   alpha_max_spacings         20.0       give up (hull fallback) beyond this sqrt(alpha)/spacing
-//   max_alpha_steps            400        candidate alphas examined before the fallback
-//   alpha_min_growth           0.0        min relative alpha increase between candidates
-//   alpha_input                "all_points" (cluster points + fracture points) | "boundary_points"
-//   scale_about                "parent_centroid" | "child_centroid"
-//   min_piece_volume_fraction  1e-6       plane cuts: pieces below this × V_parent are removed (fines)
-//   min_piece_thickness_fraction 0.02     plane cuts: pieces thinner than this × d_parent are removed
+const OptionTable& alpha_shape_options() {
+  static const OptionTable t = [] {
+    const AlphaShapeBuilderOptions d;
+    return OptionTable{
+        opt::number("convex_hull_diameter", d.hull_diameter, 0, std::numeric_limits<double>::infinity(), "m",
+                    "children smaller than this become convex hulls (Zhu & Zhao 2019 §3.2)"),
+        opt::number("convex_hull_convexity", d.hull_convexity, 0, 2, "",
+                    "children with V/V_hull at least this become convex hulls (> 1 disables)"),
+        opt::number("alpha_start_spacings", d.alpha.start_spacings, 0.5, 100, "",
+                    "the alpha walk starts at √α = this × lattice spacing"),
+        opt::number("alpha_max_spacings", d.alpha.max_spacings, 0.5, 1e6, "",
+                    "the walk gives up (convex-hull fallback) beyond √α = this × spacing; ≥ alpha_start_spacings"),
+        opt::integer("max_alpha_steps", d.alpha.max_steps, 1, 1000000, "candidate alphas examined before the fallback"),
+        opt::number("alpha_min_growth", d.alpha.min_growth, 0, 10, "", "least relative alpha increase between candidates"),
+        opt::choice("alpha_input", d.alpha_boundary_only ? "boundary_points" : "all_points",
+                    {"all_points", "boundary_points"},
+                    "points handed to the alpha shape: every cluster point and the fracture points, or the surface "
+                    "and fracture points only"),
+        opt::choice("scale_about", d.scale_about_parent ? "parent_centroid" : "child_centroid",
+                    {"parent_centroid", "child_centroid"},
+                    "volume rescale about the parent's or each child's centroid"),
+        opt::number("min_piece_volume_fraction", d.min_piece_volume_fraction, 0, 0.1, "",
+                    "plane cuts: pieces below this × the parent's volume are removed as fines (counted as a fragment "
+                    "fallback)"),
+        opt::number("min_piece_thickness_fraction", d.min_piece_thickness_fraction, 0, 0.5, "",
+                    "plane cuts: pieces thinner than this × the parent's equivalent diameter are removed as fines "
+                    "(an engine cannot take such a sliver as a body)"),
+    };
+  }();
+  return t;
+}
+
 std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "alpha_shape");
+  const Options r(cfg, alpha_shape_options());
   AlphaShapeBuilderOptions o;
-  o.hull_diameter = cfg.number("convex_hull_diameter", 0.7e-3, 0.0);
-  o.hull_convexity = cfg.number("convex_hull_convexity", 0.85, 0.0, 2.0);
-  o.alpha.start_spacings = cfg.number("alpha_start_spacings", 2.0, 0.5, 100.0);
-  o.alpha.max_spacings = cfg.number("alpha_max_spacings", 20.0, 0.5, 1e6);
+  o.hull_diameter = r.number("convex_hull_diameter");
+  o.hull_convexity = r.number("convex_hull_convexity");
+  o.alpha.start_spacings = r.number("alpha_start_spacings");
+  o.alpha.max_spacings = r.number("alpha_max_spacings");
   if (o.alpha.max_spacings < o.alpha.start_spacings)
-    cfg.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + fmt_num(o.alpha.start_spacings) + ")");
-  o.alpha.max_steps = static_cast<int>(cfg.integer("max_alpha_steps", 400, 1, 1000000));
-  o.alpha.min_growth = cfg.number("alpha_min_growth", 0.0, 0.0, 10.0);
-  o.alpha_boundary_only =
-      cfg.choice("alpha_input", "all_points", {"all_points", "boundary_points"}) == "boundary_points";
-  o.scale_about_parent =
-      cfg.choice("scale_about", "parent_centroid", {"parent_centroid", "child_centroid"}) == "parent_centroid";
-  o.min_piece_volume_fraction = cfg.number("min_piece_volume_fraction", 1e-6, 0.0, 0.1);
-  o.min_piece_thickness_fraction = cfg.number("min_piece_thickness_fraction", 0.02, 0.0, 0.5);
+    r.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + fmt_num(o.alpha.start_spacings) + ")");
+  o.alpha.max_steps = static_cast<int>(r.integer("max_alpha_steps"));
+  o.alpha.min_growth = r.number("alpha_min_growth");
+  o.alpha_boundary_only = r.string("alpha_input") == "boundary_points";
+  o.scale_about_parent = r.string("scale_about") == "parent_centroid";
+  o.min_piece_volume_fraction = r.number("min_piece_volume_fraction");
+  o.min_piece_thickness_fraction = r.number("min_piece_thickness_fraction");
   if (ctx.dimension != 3) cfg.fail("type", "fragment builder 'alpha_shape' is 3D only (scenario dimension " +
                                                std::to_string(ctx.dimension) + ")");
   return std::make_unique<AlphaShapeBuilder>(o);

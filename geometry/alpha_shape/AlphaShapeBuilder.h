@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 #include "core/FragmentBuilder.h"
 #include "geometry/AlphaShape.h"
@@ -82,7 +83,9 @@ class AlphaShapeBuilder final : public FragmentBuilder {
                                const Quat& frame = Quat{}) const;
 };
 
-// Registry factory: cfg is the scenario's "fragments" object (keys in the .cpp).
+// The options of the "fragments" object (`crumble list --options alpha_shape`).
+const OptionTable& alpha_shape_options();
+// Registry factory: cfg is the scenario's "fragments" object, read through alpha_shape_options().
 std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, const EngineContext& ctx);
 
 }  // namespace crumble

@@ -118,16 +118,29 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
   return out;
 }
 
-// Config keys of "fragments" (type "level_set"), with defaults:
-//   spacing                    0 m    children's grid spacing; 0 = the parent grid's
-//   min_thickness_cells        1.0    pieces thinner than this many grid cells are fines
-//   min_piece_volume_fraction  1e-4   pieces below this × V_parent are fines
+const OptionTable& level_set_options() {
+  static const OptionTable t = [] {
+    const LevelSetBuilderOptions d;
+    return OptionTable{
+        opt::number("spacing", d.spacing, 0, 1, "m",
+                    "grid spacing of the children; 0 = the parent grid's (another value resamples the parent first)"),
+        opt::number("min_thickness_cells", d.min_thickness_cells, 0, 100, "",
+                    "a piece thinner than this many grid cells is removed (counted as removed mass and as a fragment "
+                    "fallback)"),
+        opt::number("min_piece_volume_fraction", d.min_piece_volume_fraction, 0, 0.49, "",
+                    "a piece smaller than this × the parent's volume is removed (counted)"),
+    };
+  }();
+  return t;
+}
+
 std::unique_ptr<FragmentBuilder> make_level_set_builder(const Config& cfg, const EngineContext&) {
   cfg.string("type", "level_set");
+  const Options r(cfg, level_set_options());
   LevelSetBuilderOptions o;
-  o.spacing = cfg.number("spacing", 0.0, 0.0, 1.0);
-  o.min_thickness_cells = cfg.number("min_thickness_cells", 1.0, 0.0, 100.0);
-  o.min_piece_volume_fraction = cfg.number("min_piece_volume_fraction", 1e-4, 0.0, 0.49);
+  o.spacing = r.number("spacing");
+  o.min_thickness_cells = r.number("min_thickness_cells");
+  o.min_piece_volume_fraction = r.number("min_piece_volume_fraction");
   return std::make_unique<LevelSetBuilder>(o);
 }
 

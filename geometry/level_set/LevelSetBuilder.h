@@ -15,6 +15,7 @@
 #include <string>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "core/Engine.h"
 #include "core/FragmentBuilder.h"
 #include "geometry/LevelSetSplit.h"
@@ -44,7 +45,9 @@ class LevelSetBuilder final : public FragmentBuilder {
   LevelSetBuilderOptions opt_;
 };
 
-// Registry factory: cfg is the scenario's "fragments" object (keys in the .cpp).
+// The options of the "fragments" object (`crumble list --options level_set`).
+const OptionTable& level_set_options();
+// Registry factory: cfg is the scenario's "fragments" object, read through level_set_options().
 std::unique_ptr<FragmentBuilder> make_level_set_builder(const Config& cfg, const EngineContext& ctx);
 
 }  // namespace crumble

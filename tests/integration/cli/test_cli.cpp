@@ -164,48 +164,6 @@ TEST(Cli, ShapeReportsResolution) {
                      "not closed");
 }
 
-// Every engine × breakage model × fragment builder runs the single-grain scene (DESIGN.md:
-// the cross product is the point of the project).
-class Combination : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
-
-// Every registered engine that runs 3D scenarios (the single-grain scene is 3D): a new
-// engine is tested by registering it.
-std::vector<std::string> three_d_engines() {
-  std::vector<std::string> names;
-  for (const auto& e : crumble::engines().entries())
-    for (int d : e.dimensions)
-      if (d == 3) names.push_back(e.name);
-  return names;
-}
-
-TEST_P(Combination, SingleGrainRuns) {
-  const auto [engine, model] = GetParam();
-  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / ("combo_" + engine + "_" + model);
-  fs::remove_all(out);
-  const std::string sets = " --quiet --set engine.type=" + engine + " --set breakage.type=" + model +
-                           " --set engine.kn=5e6 --set schedule.every_stress=0.5e6";
-  const std::string pd = model == "peridynamics" ? " --set breakage.spacing_fraction=0.1" : "";
-  const Result r = run("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/single_grain_pd.json --out " +
-                       out.string() + sets + pd);
-  ASSERT_EQ(r.status, 0) << r.output;
-  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
-  EXPECT_EQ(s["engine"], engine);
-  EXPECT_EQ(s["breakage"], model);
-  const double m0 = s["mass_initial_kg"], m1 = s["mass_final_kg"], mr = s["mass_removed_kg"];
-  EXPECT_NEAR(m1 + mr, m0, 1e-9 * m0);
-  if (model == "peridynamics") {
-    EXPECT_EQ(s["breakage_events"], 1);
-    EXPECT_GE(s["grains_final"].get<long>(), 2);
-  } else {
-    EXPECT_EQ(s["breakage_events"], 0);
-  }
-}
-
-INSTANTIATE_TEST_SUITE_P(EnginesModels, Combination,
-                         ::testing::Combine(::testing::ValuesIn(three_d_engines()),
-                                            ::testing::Values("none", "peridynamics")),
-                         [](const auto& info) { return std::get<0>(info.param) + "_" + std::get<1>(info.param); });
-
 TEST(Cli, RigidOedometerRunsOnLsdem) {
   const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "rigid_lsdem";
   fs::remove_all(out);

@@ -1,0 +1,75 @@
+// `crumble bench engine`: the adapter against the raw library on the same bodies.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "crumble_config.h"
+#include "tests/support/CliRunner.h"
+
+using crumble::testing_support::run_cli;
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The rigid quick oedometer with 30 grains (the benchmark places them and lets them fall).
+std::string small_scenario() {
+  const fs::path dir = fs::temp_directory_path() / "crumble_bench_engine";
+  fs::create_directories(dir);
+  std::ifstream in(std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json");
+  Json doc = Json::parse(in);
+  doc["packing"]["count"] = 30;
+  const fs::path f = dir / "small.json";
+  std::ofstream(f) << doc.dump(1);
+  return f.string();
+}
+
+Json bench(const std::string& engine) {
+  const auto r = run_cli("bench engine --engine " + engine + " --scenario " + small_scenario() +
+                         " --settle-steps 1500 --steps 20");
+  EXPECT_EQ(r.status, 0) << r.output;
+  return Json::parse(r.output);
+}
+
+void expect_raw_comparison(const Json& j) {
+  const double a = j.at("adapter").at("ms_per_step"), raw = j.at("raw").at("ms_per_step");
+  EXPECT_GT(a, 0);
+  EXPECT_GT(raw, 0);
+  EXPECT_TRUE(std::isfinite(j.at("adapter_overhead").get<double>()));
+  // The same bodies from the same state: both worlds see grains resting on each other and
+  // on the floor, and count a similar number of touching pairs.
+  const double ca = j.at("adapter").at("contacts_per_step"), cr = j.at("raw").at("contacts_per_step");
+  EXPECT_GT(ca, 10);
+  EXPECT_NEAR(cr, ca, 0.5 * ca);
+  EXPECT_EQ(j.at("grains"), 30);
+}
+
+}  // namespace
+
+#if CRUMBLE_WITH_BULLET
+TEST(BenchEngine, BulletAgainstRawBullet) { expect_raw_comparison(bench("bullet")); }
+#endif
+#if CRUMBLE_WITH_ODE
+TEST(BenchEngine, OdeAgainstRawOde) { expect_raw_comparison(bench("ode")); }
+#endif
+
+TEST(BenchEngine, LsdemHasNoRawLibrary) {
+  const Json j = bench("lsdem");
+  EXPECT_GT(j.at("adapter").at("ms_per_step").get<double>(), 0);
+  EXPECT_TRUE(j.at("raw").is_null());
+}
+
+TEST(BenchEngine, BadInputIsExit2) {
+  auto r = run_cli("bench engine --steps 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--engine"), std::string::npos) << r.output;
+  r = run_cli("bench engine --engine nosuch --steps 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("known"), std::string::npos) << r.output;
+  r = run_cli("bench lsdem --engine bullet --steps 1");
+  EXPECT_EQ(r.status, 2) << r.output;
+}
