@@ -131,10 +131,24 @@ GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, co
       }
       r.max_overlap_fraction = std::max(r.max_overlap_fraction, c.overlap / d);
       if (c.overlap > s.max_overlap_fraction * d) {
+        static const char* const kWallNames[] = {"floor", "platen", "x = 0 wall", "x = lx wall", "y = 0 wall", "y = ly wall"};
+        const Grain& ga = *ia->second;
         std::ostringstream os;
-        os << "grain " << c.a << " overlaps " << (c.is_wall() ? "wall " + std::to_string(c.wall) : "grain " + std::to_string(c.b))
-           << " by " << c.overlap << " m, " << c.overlap / d << " of the smaller diameter (limit "
+        os << "grain " << c.a << " (d = " << ga.shape->equivalent_diameter() << " m";
+        if (ga.generation > 0) os << ", generation " << ga.generation << ", a fragment of grain " << ga.parent;
+        os << ") overlaps ";
+        if (c.is_wall())
+          os << "wall " << c.wall << (c.wall >= 0 && c.wall < 6 ? std::string(" (") + kWallNames[c.wall] + ")" : std::string());
+        else
+          os << "grain " << c.b;
+        os << " by " << c.overlap << " m, " << c.overlap / d << " of the smaller diameter (limit "
            << s.max_overlap_fraction << ", simulation.guards.max_overlap_fraction)";
+        // Deeper than the grain itself while its centroid is inside the container (checked
+        // above): no position of the grain gives that; the engine's contact is wrong.
+        if (c.is_wall() && s.containment && c.overlap > d)
+          os << "; an overlap deeper than the grain's own diameter with its centroid inside the container is no "
+                "position the grain can have: the engine reported a wrong contact depth for this shape (e.g. "
+                "a thin fragment's hull)";
         fail(at, os.str());
       }
     }

@@ -404,11 +404,14 @@ void Simulation::check_breakage(const RunState& st) {
     // The record says what the builder made of it: "no_split" when the model broke the
     // grain but the builder returned fewer than two pieces (the grain stays as it is),
     // "chip" when one child and removed fines came out.
+    // "crushed" when the builder removed all of it as fines (no child; FragmentBuilder.h).
+    const bool crushed = frags[k].children.empty() && frags[k].removed_volume > 0;
     const std::size_t pieces = frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0);
-    if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
+    if (results[k].broken && crushed) rec.analysis.outcome = "crushed";
+    else if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
     else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken || pieces < 2) continue;
+    if (!results[k].broken || (pieces < 2 && !crushed)) continue;
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;

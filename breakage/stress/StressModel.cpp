@@ -64,6 +64,10 @@ const OptionTable& stress_options() {
         opt::number("min_piece_fraction", d.min_piece_fraction, 0, 0.45, "",
                     "the fracture plane is moved along its normal until each side holds at least this fraction of "
                     "the grain (2D: area); 0 = the plane through the contacts as is (our decision, not the paper's)"),
+        opt::choice("plane_fallback", d.plane_fallback, {"centroid", "shift"},
+                    "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
+                    "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
+                    "if that fails too; shift = only shift the plane"),
     };
   }();
   return t;
@@ -86,6 +90,7 @@ StressOptions stress_options_from_config(const Config& cfg) {
   }
   o.weibull = r.boolean("weibull");
   o.min_piece_fraction = r.number("min_piece_fraction");
+  o.plane_fallback = r.string("plane_fallback");
   return o;
 }
 
@@ -181,15 +186,16 @@ std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Ve
   return make(axes[k] - a * dot(axes[k], a));
 }
 
-CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction) {
-  require(fraction < 0.5, "min_piece_fraction must be < 0.5");
-  if (!(fraction > 0)) return plane;
+namespace {
+
+// Heights along `normal` of a lattice of cell centres inside the shape (24³ in 3D, 64² in
+// 2D, over the shape's bounds), sorted: their quantiles are the offsets that leave a given
+// volume fraction on the negative side.
+std::vector<double> inside_heights(const Shape& shape, const Vec3& normal) {
   const Aabb b = shape.bounds();
   const bool flat = shape.dimension() == 2;
   const int n = flat ? 64 : 24;
   const Vec3 size = b.hi - b.lo;
-  // Heights along the normal of the lattice points inside the shape: their quantiles are
-  // the offsets that leave a given volume fraction on the negative side.
   std::vector<double> h;
   h.reserve(static_cast<std::size_t>(n) * n * (flat ? 1 : n));
   for (int k = 0; k < (flat ? 1 : n); ++k)
@@ -197,10 +203,27 @@ CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, doub
       for (int i = 0; i < n; ++i) {
         const Vec3 p{b.lo.x + size.x * (i + 0.5) / n, b.lo.y + size.y * (j + 0.5) / n,
                      flat ? 0.0 : b.lo.z + size.z * (k + 0.5) / n};
-        if (shape.contains(p)) h.push_back(dot(plane.normal, p));
+        if (shape.contains(p)) h.push_back(dot(normal, p));
       }
-  if (h.size() < 16) return plane;  // too thin to sample: leave the paper's plane alone
   std::sort(h.begin(), h.end());
+  return h;
+}
+
+}  // namespace
+
+double smaller_side_fraction(const Shape& shape, const CutPlane& plane) {
+  const std::vector<double> h = inside_heights(shape, plane.normal);
+  if (h.empty()) return 0;
+  const auto below = static_cast<double>(std::lower_bound(h.begin(), h.end(), plane.offset) - h.begin());
+  const double f = below / static_cast<double>(h.size());
+  return std::min(f, 1 - f);
+}
+
+CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction) {
+  require(fraction < 0.5, "min_piece_fraction must be < 0.5");
+  if (!(fraction > 0)) return plane;
+  const std::vector<double> h = inside_heights(shape, plane.normal);
+  if (h.size() < 16) return plane;  // too thin to sample: leave the paper's plane alone
   const std::size_t m = h.size();
   const std::size_t q = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(m)));
   const double lo = h[std::min(q, m - 1)], hi = h[m - 1 - std::min(q, m - 1)];
@@ -228,6 +251,7 @@ std::vector<std::string> StressModel::figure_names() const {
   f.push_back("equivalent_stress_Pa");
   f.push_back("strength_Pa");
   if (entry_->default_tensile_strength > 0) f.push_back("tensile_strength_Pa");
+  f.push_back("plane_through_centroid");
   return f;
 }
 
@@ -326,8 +350,24 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   std::vector<Vec3> pts;
   for (std::size_t i = 0; i < order.size() && i < need; ++i) pts.push_back(g.to_local(order[i]->point));
   const Vec3 f_body = g.orientation.conjugate().rotate(order.front()->force);
-  const auto plane = fracture_plane(pts, f_body, dim_, g.shape->equivalent_diameter());
+  auto plane = fracture_plane(pts, f_body, dim_, g.shape->equivalent_diameter());
   if (!plane) return finish("degenerate_contacts");
+  // The strongest contacts along one face (a flat grain wedged by its two corners, three
+  // contacts around one pole) put the plane through the contacts (eqs. 18–20) along the
+  // surface: it would shave a sliver. The centroid then takes the weakest point's place,
+  // as §3.3 lets it fill in for a missing contact (our reading; plane_fallback "centroid").
+  // Only if that fails too is the plane shifted (min_piece_fraction, below).
+  bool centroid_fallback = false;
+  if (o_.plane_fallback == "centroid" && o_.min_piece_fraction > 0 && pts.size() == need &&
+      smaller_side_fraction(*g.shape, *plane) < o_.min_piece_fraction) {
+    const std::vector<Vec3> fewer(pts.begin(), pts.end() - 1);
+    const auto alt = fracture_plane(fewer, f_body, dim_, g.shape->equivalent_diameter());
+    if (alt && smaller_side_fraction(*g.shape, *alt) >= o_.min_piece_fraction) {
+      plane = alt;
+      centroid_fallback = true;
+    }
+  }
+  a.set_figure("plane_through_centroid", centroid_fallback ? 1.0 : 0.0);
   // §3.3 fixes the plane's orientation by the contacts (eqs. 18–20); its offset is kept
   // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction).
   const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, o_.min_piece_fraction);

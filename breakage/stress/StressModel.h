@@ -45,6 +45,13 @@ struct StressOptions {
   // as is, which shaves a sliver (or misses the grain) when the strongest contacts sit
   // close together; the grain then "breaks" at every check without changing. 0 = off.
   double min_piece_fraction = 0.1;
+  // "plane_fallback": what happens first when the plane through the contacts leaves less than
+  // min_piece_fraction on one side. "centroid": the centroid replaces the weakest of the
+  // points (2D: the line through the strongest contact and the centroid; 3D: the plane
+  // through the two strongest and the centroid), as Harmon et al. 2020 §3.3 let it fill in
+  // for a missing contact; the shift below applies only if that plane fails too. "shift":
+  // keep the orientation and only shift the plane.
+  std::string plane_fallback = "centroid";
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
 };
@@ -86,6 +93,10 @@ std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Ve
 // fraction must be < 0.5.
 CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction);
 
+// The smaller of the two volume fractions (2D: areas) on either side of `plane`, on the
+// lattice of clamp_plane_to_interior; 0 when the plane misses the shape.
+double smaller_side_fraction(const Shape& shape, const CutPlane& plane);
+
 class StressModel final : public BreakageModel {
  public:
   StressModel(StressOptions o, int dimension);
@@ -95,7 +106,8 @@ class StressModel final : public BreakageModel {
   // Outcomes: split (broken, a CuttingSurfaces with one plane), intact, no_load (no contact
   // carries force), single_contact (3D: one partner; held off, §3.3), degenerate_contacts
   // (the contacts fix no plane). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
-  // equivalent_stress_Pa, strength_Pa (and tensile_strength_Pa for max_principal).
+  // equivalent_stress_Pa, strength_Pa (and tensile_strength_Pa for max_principal),
+  // plane_through_centroid (1 when StressOptions::plane_fallback replaced the plane).
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   std::vector<std::string> figure_names() const override;
   // Harmon et al. check every grain at every check: no size limit (fines leave through

@@ -1,5 +1,7 @@
 #include "geometry/level_set/LevelSetBuilder.h"
 
+#include <algorithm>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
@@ -24,7 +26,7 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
   so.min_thickness_cells = opt_.min_thickness_cells;
   so.min_volume = opt_.min_piece_volume_fraction * V;
   FragmentResult out;
-  const SplitResult sr = std::visit(
+  const SplitResult first = std::visit(
       [&](const auto& f) -> SplitResult {
         using T = std::decay_t<decltype(f)>;
         if constexpr (std::is_same_v<T, CuttingSurfaces>) {
@@ -44,9 +46,59 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
         }
       },
       fracture);
+  SplitResult sr = first;
   if (sr.missed) {
-    out.method = "no_split";
-    return out;
+    // The cut runs through the grain (parent surface nodes more than a quarter cell on both
+    // sides of a plane) but no grid node lies on one side of it: the grid cannot resolve
+    // the piece. One plane: it is moved along its normal to leave at least one row of grid
+    // nodes on each side (counted as a fallback). A grain with a single row of nodes along
+    // the normal, or whose moved cut still fails, is of the size of its discretisation: Harmon et
+    // al. 2020 §3.4 remove such grains, so it is crushed — all of it removed volume (no
+    // child; events.csv outcome crushed). A cut that misses the grain stays a no_split.
+    const auto* cs = std::get_if<CuttingSurfaces>(&fracture);
+    const double h = phi1.spacing();
+    bool through = false;
+    if (cs)
+      for (const auto& p : cs->planes) {
+        bool neg = false, pos = false;
+        for (const auto& x : phi1.nodes()) {
+          const double f = p.signed_distance(x);
+          neg = neg || f < -0.25 * h;
+          pos = pos || f > 0.25 * h;
+        }
+        through = through || (neg && pos);
+      }
+    if (!through) {
+      out.method = "no_split";
+      return out;
+    }
+    if (cs->planes.size() == 1) {
+      const CutPlane& p = cs->planes.front();
+      const auto c = phi1.counts();
+      const auto& v = phi1.values();
+      double hmin = 1e300, hmax = -1e300;
+      for (int k = 0; k < c[2]; ++k)
+        for (int j = 0; j < c[1]; ++j)
+          for (int i = 0; i < c[0]; ++i) {
+            const std::size_t id = static_cast<std::size_t>(i) + static_cast<std::size_t>(c[0]) * (j + static_cast<std::size_t>(c[1]) * k);
+            if (!(v[id] < 0)) continue;
+            const double t = dot(p.normal, phi1.origin() + Vec3{i * h, j * h, phi1.dimension() == 3 ? k * h : 0.0});
+            hmin = std::min(hmin, t);
+            hmax = std::max(hmax, t);
+          }
+      if (hmax - hmin >= 0.999 * h) {  // two rows of nodes or more: a cut between them
+        const double m = std::min(h, 0.5 * (hmax - hmin));  // a cell from the outer rows, or the middle
+        sr = split_by_planes(phi1, {{p.normal, std::clamp(p.offset, hmin + m, hmax - m)}}, so);
+        if (!sr.missed && !sr.children.empty()) out.method = "level_set_planes_moved";
+      }
+    }
+    if (sr.missed || sr.children.empty()) {
+      out.method = "level_set_unresolved";
+      out.removed_volume = V;
+      out.fallbacks = 1;
+      return out;
+    }
+    ++out.fallbacks;
   }
   double sum = sr.removed_volume;
   for (const auto& c : sr.children) sum += c.volume;
@@ -62,7 +114,7 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
     out.children.push_back(std::move(fr));
   }
   out.removed_volume = k * sr.removed_volume;
-  out.fallbacks = static_cast<int>(sr.removed.size());  // pieces removed as fines
+  out.fallbacks += static_cast<int>(sr.removed.size());  // pieces removed as fines
   return out;
 }
 

@@ -33,7 +33,11 @@ class LevelSetBuilder final : public FragmentBuilder {
   explicit LevelSetBuilder(LevelSetBuilderOptions opt = {});
   std::string name() const override { return "level_set"; }
   // Thread-safe (const, no shared mutable state). A surface that misses the grain gives
-  // no child and method "no_split" (not an error).
+  // no child and method "no_split" (not an error). A plane through the grain that leaves no
+  // grid node on one side is moved to leave a row of nodes on each (method
+  // "level_set_planes_moved"); if the grain has a single row of nodes along the normal, or
+  // the moved cut fails too, no child, removed_volume = V_parent and method
+  // "level_set_unresolved" (crushed to fines, Harmon et al. 2020 §3.4).
   FragmentResult build(const Shape& parent, const Fracture& fracture) const override;
   const LevelSetBuilderOptions& options() const { return opt_; }
 

@@ -220,6 +220,54 @@ TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
   EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
 }
 
+// Harmon et al. 2020 §3.4: a grain of the size of its discretisation is removed. A slab
+// 1.6 cells thick (one row of grid nodes inside) cut along its length: its grid cannot
+// separate two pieces (split_by_planes finds one side empty), yet the plane runs through it.
+// All of it is removed volume (the Simulation records the grain as crushed), the budget
+// exact. The same slab cut across its length splits in two; a plane beyond it misses it.
+TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthIsCrushedToFines) {
+  const double a = 10 * kH, b = 0.8 * kH;
+  auto box = [&](const Vec3& p) {
+    const double qx = std::abs(p.x) - a, qy = std::abs(p.y) - b;
+    return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0);
+  };
+  // Bounds on whole cells about the origin: a lattice row runs along y = 0.
+  const auto slab = Shape::from_level_set(LevelSetGrid::sample(2, {{-a - 2 * kH, -3 * kH, 0}, {a + 2 * kH, 3 * kH, 0}}, kH, box));
+  LevelSetBuilder lb;
+  const CuttingSurfaces along{{{{0, 1, 0}, 0.3 * kH}}};
+  ASSERT_TRUE(split_by_planes(slab->level_set(), {{{0, 1, 0}, 0.3 * kH}}).missed);
+  const FragmentResult fr = lb.build(*slab, along);
+  EXPECT_EQ(fr.method, "level_set_unresolved");
+  EXPECT_TRUE(fr.children.empty());
+  EXPECT_NEAR(fr.removed_volume, slab->volume(), 1e-12 * slab->volume());
+  EXPECT_EQ(fr.fallbacks, 1);
+  const FragmentResult across = lb.build(*slab, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
+  EXPECT_EQ(across.children.size(), 2u);
+  const FragmentResult miss = lb.build(*slab, CuttingSurfaces{{{{0, 1, 0}, 3 * b}}});
+  EXPECT_EQ(miss.method, "no_split");
+  EXPECT_EQ(miss.removed_volume, 0.0);
+}
+
+// A slab 3.2 cells thick (grid rows at y = −h, 0, h inside) cut at y = −1.3 h, below its lowest
+// row: the cut runs through the slab but leaves no grid node below it. The builder moves it
+// to leave a cell of nodes on each side (y = 0) and gives two resolved halves, budget exact.
+TEST(LevelSetSplit, CutBetweenTheSurfaceAndTheFirstGridRowIsMovedInside) {
+  const double a = 10 * kH, b = 1.6 * kH;
+  auto box = [&](const Vec3& p) {
+    const double qx = std::abs(p.x) - a, qy = std::abs(p.y) - b;
+    return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0);
+  };
+  const auto slab = Shape::from_level_set(LevelSetGrid::sample(2, {{-a - 2 * kH, -4 * kH, 0}, {a + 2 * kH, 4 * kH, 0}}, kH, box));
+  ASSERT_TRUE(split_by_planes(slab->level_set(), {{{0, 1, 0}, -1.3 * kH}}).missed);
+  LevelSetBuilder lb;
+  const FragmentResult fr = lb.build(*slab, CuttingSurfaces{{{{0, 1, 0}, -1.3 * kH}}});
+  EXPECT_EQ(fr.method, "level_set_planes_moved");
+  ASSERT_EQ(fr.children.size(), 2u);
+  EXPECT_GE(fr.fallbacks, 1);
+  EXPECT_NEAR(fr.children[0].shape->volume() / fr.children[1].shape->volume(), 1.0, 0.1);
+  EXPECT_LT(budget_error(fr, slab->volume()), 1e-9);
+}
+
 // Peridynamics output: two clusters of a lattice in a rotated frame.
 TEST(LevelSetSplit, PointClustersPartitionASphere) {
   const auto parent = Shape::sphere(kR, {1, kH, 0});

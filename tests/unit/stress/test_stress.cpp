@@ -291,7 +291,7 @@ TEST(StressModel, SplitsASphereThroughItsLoadAxis) {
   EXPECT_NEAR(dot(planes[0].normal, axis_body), 0, 1e-9);
   EXPECT_NEAR(planes[0].offset, 0, 1e-12);
   EXPECT_EQ(m->figure_names(), (std::vector<std::string>{"sigma_1_Pa", "sigma_2_Pa", "sigma_3_Pa",
-                                                          "equivalent_stress_Pa", "strength_Pa"}));
+                                                          "equivalent_stress_Pa", "strength_Pa", "plane_through_centroid"}));
 }
 
 // The plane through three strongest contacts close together near the top of a sphere
@@ -305,7 +305,8 @@ TEST(StressModel, ContactsNearOneSideStillSplitTheGrainInTwoMeaningfulPieces) {
   const double offset_exact = R * (1 - lo);
   ASSERT_NEAR(offset_exact / R, 0.6075, 1e-3);
 
-  auto m = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}}, 3);
+  // plane_fallback "shift": the orientation of the contacts' plane is kept and only shifted.
+  auto m = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"plane_fallback", "shift"}}, 3);
   EXPECT_DOUBLE_EQ(m->options().min_piece_fraction, f);  // the default
   Grain g;
   g.id = 3;
@@ -322,6 +323,7 @@ TEST(StressModel, ContactsNearOneSideStillSplitTheGrainInTwoMeaningfulPieces) {
                           wall_contact(6, {-0.3 * R, -0.3 * R, zb}, {0, 0, 225}), wall_contact(7, {0.3 * R, -0.3 * R, zb}, {0, 0, 225})};
   const auto a = m->analyse(g, Material{}, cs);
   ASSERT_TRUE(a.broken);
+  EXPECT_EQ(a.figure("plane_through_centroid"), 0.0);
   const CutPlane p = std::get<CuttingSurfaces>(*a.fracture).planes.at(0);
   EXPECT_NEAR(std::abs(p.normal.z), 1.0, 1e-9);  // orientation from the contacts (eq. 20)
   // The lattice estimate (24³ cells over the bounds) is within 2 % of R of the closed form.
@@ -338,6 +340,52 @@ TEST(StressModel, ContactsNearOneSideStillSplitTheGrainInTwoMeaningfulPieces) {
   const double v0 = r.children[0].shape->volume(), v1 = r.children[1].shape->volume();
   EXPECT_GE(std::min(v0, v1), 0.08 * g.shape->volume());
   EXPECT_LE(std::min(v0, v1), 0.12 * g.shape->volume());
+
+  // The default plane_fallback "centroid": the centroid replaces the weakest of the three
+  // points (Harmon et al. 2020 §3.3 let it fill in), so the plane holds the two strongest
+  // contacts and the centroid: a meridian plane, two halves (lattice estimate within 3 %).
+  auto mc = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}}, 3);
+  EXPECT_EQ(mc->options().plane_fallback, "centroid");
+  mc->assign_strength(g, Material{}, rng);
+  const auto ac = mc->analyse(g, Material{}, cs);
+  ASSERT_TRUE(ac.broken);
+  EXPECT_EQ(ac.figure("plane_through_centroid"), 1.0);
+  const CutPlane pc = std::get<CuttingSurfaces>(*ac.fracture).planes.at(0);
+  EXPECT_NEAR(pc.offset, 0.0, 1e-12 * R);                                     // through the centroid
+  int in_plane = 0;  // and two of the three equally strong top contacts
+  for (const Vec3& q : {Vec3{0.1 * R, 0, zc}, Vec3{-0.05 * R, 0.0866 * R, zc}, Vec3{-0.05 * R, -0.0866 * R, zc}})
+    in_plane += std::abs(dot(pc.normal, q)) < 1e-12 * R;
+  EXPECT_EQ(in_plane, 2);
+  EXPECT_NEAR(smaller_side_fraction(*g.shape, pc), 0.5, 0.03);
+
+  // 2D: a disk under two contacts close together on its rim (±0.05 rad from the top) and one
+  // opposite. 2D forces are per metre of thickness, so eq. 5 gives a uniaxial σ_yy =
+  // −(2·P·R·cos 0.05 + 2P·R)/(π R²) (the x–y terms of the two top contacts cancel); plane
+  // stress: σ_VM = |σ_yy|. With P = 400 N/m on a 1 mm disk that is 0.51 MPa, below the 1 MPa
+  // strength: the disk stays intact, as it should (the case removed in 85ad7c2). Ten times
+  // the load breaks it; the line through the strongest contact (below) and the strongest
+  // top one is nearly a diameter.
+  auto m2 = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}}, 2);
+  Grain d;
+  d.shape = Shape::disk(R);
+  m2->assign_strength(d, Material{}, rng);
+  const double s = std::sin(0.05), c = std::cos(0.05);
+  for (double P : {400.0, 4000.0}) {
+    std::vector<Contact> c2{wall_contact(1, {R * s, R * c, 0}, {0, -P, 0}), wall_contact(2, {-R * s, R * c, 0}, {0, -P, 0}),
+                            wall_contact(0, {0, -R, 0}, {0, 2 * P, 0})};
+    const double syy = (2 * P * R * c + 2 * P * R) / (kPi * R * R);
+    const auto a2 = m2->analyse(d, Material{}, c2);
+    EXPECT_NEAR(a2.figure("equivalent_stress_Pa"), syy, 1e-9 * syy) << P;
+    EXPECT_EQ(a2.broken, syy >= 1e6) << P;
+    if (!a2.broken) {
+      EXPECT_EQ(a2.outcome, "intact");
+      EXPECT_LT(syy, 1e6);
+      continue;
+    }
+    const FragmentResult r2 = LevelSetBuilder().build(*d.shape, *a2.fracture);
+    ASSERT_EQ(r2.children.size(), 2u);
+    EXPECT_GE(std::min(r2.children[0].shape->volume(), r2.children[1].shape->volume()), 0.4 * d.shape->volume());
+  }
 
   // Option range: a fraction of 0.5 or more is refused with its path.
   nlohmann::json bad = {{"criterion", "von_mises"}, {"min_piece_fraction", 0.5}};
@@ -370,7 +418,7 @@ TEST(StressModel, DefaultsOfScreeningAndSchedule) {
   EXPECT_EQ(m3->default_screening().max_unbalanced_force_ratio, 0);
   EXPECT_EQ(m3->default_schedule().every_steps, 100);
   EXPECT_EQ(m3->default_schedule().every_stress, 0);
-  EXPECT_EQ(m2->figure_names().size(), 4u);  // σ1, σ2, equivalent, strength
+  EXPECT_EQ(m2->figure_names().size(), 5u);  // σ1, σ2, equivalent, strength, plane_through_centroid
 }
 
 TEST(StressModel, UnknownCriterionAndMisplacedTensileStrength) {
