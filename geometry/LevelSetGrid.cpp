@@ -469,9 +469,11 @@ std::shared_ptr<const LevelSetGrid> LevelSetGrid::sample(int dim, const Aabb& b,
     g->n_[a] = static_cast<int>(std::min(cells, 1e9)) + 1 + 2 * opt.pad;
     total *= g->n_[a];
   }
-  if (total > 2e8)
+  // 2e7 nodes (≈ 270³) = 160 MB of values and a minute of sampling: far beyond any grain's
+  // need; larger requests (fuzzing found them) ran out of memory.
+  if (total > 2e7)
     throw std::invalid_argument(who + ": level-set grid of " + num(total) + " nodes is too large (spacing " + num(h) +
-                                " m)");
+                                " m; at most 2e7 nodes): raise resolution.level_set_spacing");
   g->phi_.resize(static_cast<std::size_t>(total));
   for (int k = 0; k < g->n_[2]; ++k)
     for (int j = 0; j < g->n_[1]; ++j)

@@ -486,7 +486,11 @@ std::shared_ptr<const LevelSetGrid> Shape::level_set_ptr() const {
     if (ls_) return;
     const Vec3 ext = bounds_.size();
     const double smallest = dimension_ == 2 ? std::min(ext.x, ext.y) : std::min({ext.x, ext.y, ext.z});
-    const double h = res_.level_set_spacing > 0 ? res_.level_set_spacing : smallest / 20.0;
+    const double largest = dimension_ == 2 ? std::max(ext.x, ext.y) : std::max({ext.x, ext.y, ext.z});
+    // Automatic spacing: 20 cells across the thinnest extent, but at most 400 along the
+    // longest, so a needle-like input cannot ask for a grid of 10^7+ nodes (fuzzing found
+    // one: 2 m × 1 mm); grains with an aspect ratio up to 20 are unaffected.
+    const double h = res_.level_set_spacing > 0 ? res_.level_set_spacing : std::max(smallest / 20.0, largest / 400.0);
     LevelSetOptions opt;
     opt.target_nodes = res_.surface_nodes;
     opt.name = "shape " + describe();
