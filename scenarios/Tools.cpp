@@ -417,27 +417,28 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   // The raw world gets the adapter's solver settings and length scale; both start from
   // this state and are stepped alternately, so the machine's load falls on both alike.
   std::unique_ptr<RawWorld> raw_world;
-#if CRUMBLE_WITH_BULLET
-  if (auto* b = dynamic_cast<BulletEngine*>(&eng)) {
-    Json ec = sc.effective["engine"];
-    const auto o = BulletEngine::read_options(Config(ec));
+  Json engine_section = sc.effective["engine"];
+  const Config engine_cfg(engine_section);
+  // The solver settings both rigid-body adapters share, read from the adapter's own options.
+  auto shared_settings = [&](const auto& o, double length_scale) {
     raw.solver_iterations = o.solver_iterations;
     raw.erp = o.erp;
     raw.mass_scale = o.mass_scale;
+    raw.length_scale = length_scale;
+  };
+#if CRUMBLE_WITH_BULLET
+  if (auto* b = dynamic_cast<BulletEngine*>(&eng)) {
+    const auto o = BulletEngine::read_options(engine_cfg);
+    shared_settings(o, b->length_scale());
     raw.margin_fraction = o.margin_fraction;
-    raw.length_scale = b->length_scale();
     raw_world = make_raw_bullet_world(raw);
   }
 #endif
 #if CRUMBLE_WITH_ODE
-  if (auto* o = dynamic_cast<OdeEngine*>(&eng)) {
-    Json ec = sc.effective["engine"];
-    const auto op = OdeEngine::read_options(Config(ec));
-    raw.solver_iterations = op.solver_iterations;
-    raw.erp = op.erp;
-    raw.mass_scale = op.mass_scale;
-    raw.contacts_per_pair = op.contacts_per_pair;
-    raw.length_scale = o->length_scale();
+  if (auto* e = dynamic_cast<OdeEngine*>(&eng)) {
+    const auto o = OdeEngine::read_options(engine_cfg);
+    shared_settings(o, e->length_scale());
+    raw.contacts_per_pair = o.contacts_per_pair;
     raw_world = make_raw_ode_world(raw);
   }
 #endif
