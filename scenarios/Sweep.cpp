@@ -282,7 +282,7 @@ int run_sweep(const SweepRequest& req) {
   m << "\n";
   if (!notes.empty()) {
     m << "\n";
-    for (std::size_t i = 0; i < notes.size(); ++i) m << "- " << notes[i] << "\n";
+    for (std::size_t i = 0; i < notes.size(); ++i) m << "(" << i + 1 << ") " << notes[i] << "\n";
   }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   m << "\nEvery setting starts from the same packing (" << (run.packing_hash.empty() ? "built by the scenario's scene in each run; see packing_hash in comparison.csv" : "packing.json, SHA-256 " + run.packing_hash)
