@@ -97,6 +97,8 @@ int run_sweep(const SweepRequest& req) {
     if (p.find('=') != std::string::npos)
       throw InputError("--param " + req.params[i] + ": expected a scenario path (e.g. breakage.spacing_fraction); "
                        "the values go in --values");
+    if (trim(req.values[i]).empty())
+      throw InputError("--param " + p + " --values '" + req.values[i] + "': empty value list; expected a,b,c");
     vary.push_back(p + "=" + req.values[i]);
     try {
       axes.push_back(parse_vary(vary.back()));
