@@ -1,6 +1,7 @@
 // crumble: the command line.
 //   crumble run SCENARIO --out DIR [--set path=value]... [--seed N] [--threads N]
 //   crumble compare SCENARIO --out DIR --vary path=v1,v2... [--set path=value]... [--jobs N]
+//   crumble sweep SCENARIO --out DIR --param PATH --values a,b,c [...] [--reference V] [--metric NAME]...
 //   crumble validate SCENARIO [--set path=value]... [--print]
 //   crumble list [--options NAME [--markdown]]
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
@@ -24,6 +25,7 @@
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
 #include "scenarios/Compare.h"
+#include "scenarios/Sweep.h"
 #include "scenarios/OptionDocs.h"
 #include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
@@ -78,6 +80,14 @@ int cmd_compare(const std::string& file, const std::string& out, const std::vect
   req.quiet = quiet;
   req.force = force;
   return run_compare(req);
+}
+
+// `crumble sweep`: settings of a few knobs against a reference, error and cost (scenarios/Sweep.h).
+int cmd_sweep(const std::string& file, const std::string& out, SweepRequest req) {
+  req.scenario = load_scenario_file(file);
+  req.source_name = file;
+  req.out = out;
+  return run_sweep(req);
 }
 
 int cmd_validate(const std::string& file, const std::vector<std::string>& sets, bool print) {
@@ -194,6 +204,32 @@ int main(int argc, char** argv) {
               "others still ran); 2 bad input in any combination (checked before anything runs); 130/143 "
               "interrupted.");
 
+  SweepRequest sweep_req;
+  auto* swp = app.add_subcommand("sweep", "run a scenario at several settings of a knob, from one packing; error "
+                                          "against a reference setting, cost, the error–cost front");
+  swp->add_option("scenario", file, "scenario JSON file")->required();
+  swp->add_option("--out", out, "output directory (one folder per setting, sweep.csv, pareto.md, comparison.*)")
+      ->required();
+  swp->add_option("--param", sweep_req.params, "scenario path to sweep (repeatable; each followed by --values)")
+      ->required();
+  swp->add_option("--values", sweep_req.values, "a,b,c: the values of the --param before it")->required();
+  swp->add_option("--reference", sweep_req.reference,
+                  "the reference value of each --param, in order (default: the last value given, taken as the finest)");
+  swp->add_option("--metric", sweep_req.metrics,
+                  "metric to compare (repeatable; default: every one the reference run reports), e.g. crushing_force");
+  swp->add_option("--set", sweep_req.sets, "fix a scenario value for every setting: path=value");
+  swp->add_option("--seed", sweep_req.seed, "random seed (overrides the scenario's)");
+  swp->add_option("--threads", sweep_req.threads, "threads of each run (overrides the scenario's)")
+      ->check(CLI::Range(1, 1024));
+  swp->add_option("--jobs", sweep_req.jobs, "settings run at the same time (each a process; default 1)")
+      ->check(CLI::Range(1, 64));
+  swp->add_flag("--quiet", sweep_req.quiet, "only errors on stderr");
+  swp->add_flag("--force", sweep_req.force,
+                "use a non-empty --out folder: first remove the files an earlier sweep wrote (only crumble's own)");
+  swp->footer("Exit status: 0 every setting ran; 1 one or more failed while running (their rows say why), or the "
+              "reference failed; 2 bad input (unknown --metric, a path the scenario refuses, empty --values, ...), "
+              "checked before anything runs; 130/143 interrupted. docs/sweep.md");
+
   auto* val = app.add_subcommand("validate", "check a scenario without running it");
   val->add_option("scenario", file, "scenario JSON file")->required();
   val->add_option("--set", sets, "override a scenario value: path=value");
@@ -236,6 +272,7 @@ int main(int argc, char** argv) {
     for (const auto& p : plugins) load_plugin(p);
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
+    if (*swp) return cmd_sweep(file, out, sweep_req);
     if (*val) return cmd_validate(file, sets, print);
     if (*lst) {
       if (list_markdown && list_options.empty()) throw InputError("list --markdown needs --options NAME");

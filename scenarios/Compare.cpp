@@ -1,6 +1,7 @@
 #include "scenarios/Compare.h"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -216,10 +217,15 @@ const std::vector<std::pair<std::string, std::string>> kOptional = {
     {"product_d50_m", "product d50 mm"},
     {"ncl_loglog_slope", "NCL slope"}};
 
-const std::vector<std::string> kTimeParts = {"engine", "contacts", "screening", "analyses",
-                                             "fragments", "guards", "output"};
+const std::vector<std::string>& kTimeParts = time_breakdown_parts();
 
 }  // namespace
+
+const std::vector<std::string>& time_breakdown_parts() {
+  static const std::vector<std::string> parts = {"engine", "contacts", "screening", "analyses",
+                                                 "fragments", "guards", "output"};
+  return parts;
+}
 
 std::string void_ratio_stress_key(double stress) { return "void_ratio_at_stress_" + fmt_num(stress) + "_Pa"; }
 std::string void_ratio_strain_key(double strain) { return "void_ratio_at_strain_" + fmt_num(strain); }
@@ -409,7 +415,7 @@ Json read_summary(const fs::path& p) {
 
 // Files `compare` itself writes in DIR (the run folders are each run's own business).
 bool is_compare_output(const std::string& n) {
-  for (const char* f : {"comparison.csv", "comparison.md", "packing.json"})
+  for (const char* f : {"comparison.csv", "comparison.md", "packing.json", "sweep.csv", "pareto.md"})
     for (const char* sfx : {"", ".tmp"})
       if (n == std::string(f) + sfx) return true;
   return false;
@@ -449,9 +455,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-int run_compare(const CompareRequest& req) {
+int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
+
+CompareOutcome compare_runs(const CompareRequest& req) {
+  CompareOutcome outcome;
   const auto t0 = std::chrono::steady_clock::now();
-  if (req.vary.empty()) throw InputError("compare: give at least one --vary path=value1,value2,...");
+  if (req.vary.empty()) throw InputError(req.command + ": give at least one --vary path=value1,value2,...");
   if (req.jobs < 1) throw InputError("--jobs: expected at least 1");
   std::vector<VaryAxis> axes;
   for (const auto& v : req.vary) axes.push_back(parse_vary(v));
@@ -487,6 +496,7 @@ int run_compare(const CompareRequest& req) {
     for (double s : sc.output.psd_at_strain) levels.push_back(void_ratio_strain_key(s));
   }
 
+  const std::string flag = req.command == "sweep" ? "--param" : "--vary";
   // Every combination is checked before anything runs (with the scenario's own packing; the
   // shared packing.json holds the same grains).
   for (const auto& c : combos) {
@@ -495,9 +505,9 @@ int run_compare(const CompareRequest& req) {
     try {
       build_request(r);
     } catch (const ConfigError& e) {
-      throw InputError("--vary: the combination " + c.label() + " is refused by the scenario: " + e.what());
+      throw InputError(flag + ": the combination " + c.label() + " is refused by the scenario: " + e.what());
     } catch (const std::invalid_argument& e) {
-      throw InputError("--vary: the combination " + c.label() + " is refused by the scenario: " + e.what());
+      throw InputError(flag + ": the combination " + c.label() + " is refused by the scenario: " + e.what());
     }
   }
 
@@ -510,7 +520,7 @@ int run_compare(const CompareRequest& req) {
   install_stop_signals();
 
   std::vector<std::string> header;
-  header.push_back("# crumble compare: " + (base_doc.is_object() ? base_doc.value("name", std::string("scenario")) : "") +
+  header.push_back("# crumble " + req.command + ": " + (base_doc.is_object() ? base_doc.value("name", std::string("scenario")) : "") +
                    " (" + req.source_name + ")");
   header.push_back("");
   std::string how = "Varied:";
@@ -532,7 +542,7 @@ int run_compare(const CompareRequest& req) {
     p.force = req.force;
     p.packing_only = true;
     p.quiet = false;
-    if (!req.quiet) std::cerr << "crumble: compare: building the packing (log " << (logs / "packing.log").string() << ")\n";
+    if (!req.quiet) std::cerr << "crumble: " << req.command << ": building the packing (log " << (logs / "packing.log").string() << ")\n";
     const pid_t pid = spawn(p, (logs / "packing.log").string());
     int st = 0;
     while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
@@ -540,10 +550,11 @@ int run_compare(const CompareRequest& req) {
     const int code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
     if (code != 0) {
       const std::string why = reason_from_log((logs / "packing.log").string());
-      std::cerr << "crumble: compare: the packing stage ended with status " << code
+      std::cerr << "crumble: " << req.command << ": the packing stage ended with status " << code
                 << (why.empty() ? "" : ": " + why) << " (log " << (logs / "packing.log").string() << ")\n";
-      if (code == 130 || code == 143) return code;
-      return code == 2 ? 2 : 1;
+      outcome.axes = axes;
+      outcome.status = code == 130 || code == 143 ? code : code == 2 ? 2 : 1;
+      return outcome;
     }
     fs::copy_file(dir / "packing" / "packing.json", dir / "packing.json", fs::copy_options::overwrite_existing);
     packing_file = fs::absolute(dir / "packing.json").string();
@@ -574,7 +585,7 @@ int run_compare(const CompareRequest& req) {
       r.packing_file = packing_file;
       const std::string log = (logs / (combos[next].name + ".log")).string();
       if (!req.quiet)
-        std::cerr << "crumble: compare: [" << next + 1 << "/" << combos.size() << "] " << combos[next].label()
+        std::cerr << "crumble: " << req.command << ": [" << next + 1 << "/" << combos.size() << "] " << combos[next].label()
                   << " started (log " << log << ")\n";
       const pid_t pid = spawn(r, log);
       running[pid] = next;
@@ -588,7 +599,8 @@ int run_compare(const CompareRequest& req) {
     }
     if (running.empty()) break;
     int st = 0;
-    const pid_t pid = waitpid(-1, &st, WNOHANG);
+    struct rusage ru {};
+    const pid_t pid = wait4(-1, &st, WNOHANG, &ru);
     if (pid == 0 || (pid < 0 && errno == EINTR)) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
       continue;
@@ -599,6 +611,7 @@ int run_compare(const CompareRequest& req) {
     ComparisonRow& row = rows[it->second];
     row.exit_status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
     row.status = status_word(row.exit_status);
+    row.peak_rss_bytes = 1024.0 * static_cast<double>(ru.ru_maxrss);  // Linux: kilobytes
     const std::string log = (logs / (row.combination.name + ".log")).string();
     if (row.exit_status != 0) {
       row.reason = WIFSIGNALED(st) ? "the run was killed by signal " + std::to_string(WTERMSIG(st))
@@ -612,7 +625,7 @@ int run_compare(const CompareRequest& req) {
       row.reason = "no summary.json";
     }
     if (!req.quiet)
-      std::cerr << "crumble: compare: " << row.combination.label() << ": " << row.status << " after "
+      std::cerr << "crumble: " << req.command << ": " << row.combination.label() << ": " << row.status << " after "
                 << fmt(seconds_since(started[pid]), 3) << " s" << (row.reason.empty() ? "" : ": " + row.reason)
                 << "\n";
     running.erase(it);
@@ -623,12 +636,21 @@ int run_compare(const CompareRequest& req) {
   header.push_back("Wall time of the whole comparison: " + fmt(seconds_since(t0), 4) + " s.");
   write_comparison(dir.string(), axes, rows, levels, header);
   if (!req.quiet)
-    std::cerr << "crumble: compare: " << combos.size() << " combinations in " << fmt(seconds_since(t0), 4)
+    std::cerr << "crumble: " << req.command << ": " << combos.size() << " combinations in " << fmt(seconds_since(t0), 4)
               << " s; table in " << (dir / "comparison.md").string() << "\n";
-  if (stop_requested()) return interrupted_status();
+  outcome.axes = axes;
+  outcome.rows = rows;
+  outcome.packing_hash = packing_hash;
+  if (stop_requested()) {
+    outcome.status = interrupted_status();
+    return outcome;
+  }
   for (const auto& r : rows)
-    if (r.exit_status != 0) return r.exit_status == 130 || r.exit_status == 143 ? r.exit_status : 1;
-  return 0;
+    if (r.exit_status != 0) {
+      outcome.status = r.exit_status == 130 || r.exit_status == 143 ? r.exit_status : 1;
+      return outcome;
+    }
+  return outcome;
 }
 
 }  // namespace crumble

@@ -48,6 +48,7 @@ struct CompareRequest {
   std::optional<int> threads;
   int jobs = 1;
   bool force = false, quiet = false;
+  std::string command = "compare";  // the subcommand, in progress lines and the table's title
 };
 
 // One row of the comparison: a combination, how its run ended and its summary.json.
@@ -57,11 +58,17 @@ struct ComparisonRow {
   int exit_status = -1;
   std::string reason;
   nlohmann::json summary;  // DIR/<combination>/summary.json (null when there is none)
+  // Peak resident memory of the run's process (getrusage ru_maxrss via wait4, bytes); 0 when
+  // it did not run. The run is a fork of crumble, so it includes the parent's pages it kept.
+  double peak_rss_bytes = 0;
 };
 
 // summary.json keys of the void ratio at a reported stress (Pa) or axial strain level.
 std::string void_ratio_stress_key(double stress);
 std::string void_ratio_strain_key(double strain);
+
+// The parts of summary.json `time_breakdown_s`, in table order.
+const std::vector<std::string>& time_breakdown_parts();
 
 // comparison.csv and comparison.md in `dir`, from the rows' summaries only. `levels`: the
 // void-ratio keys the scenario reports (a column each even when no run reached the level;
@@ -74,5 +81,15 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
 // scenario, a malformed --vary, an --out folder holding other files) throws ConfigError or
 // InputError before anything runs.
 int run_compare(const CompareRequest& req);
+
+// What a comparison ran: its axes, one row per combination (in order) and the exit status
+// run_compare returns. `crumble sweep` builds on it (scenarios/Sweep.h).
+struct CompareOutcome {
+  int status = 0;
+  std::vector<VaryAxis> axes;
+  std::vector<ComparisonRow> rows;
+  std::string packing_hash;  // empty when the scene builds its packing in each combination
+};
+CompareOutcome compare_runs(const CompareRequest& req);
 
 }  // namespace crumble
