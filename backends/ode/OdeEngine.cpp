@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -34,9 +36,25 @@ namespace {
 
 constexpr unsigned long kGrainBit = 1, kWallBit = 2, kPlatenBit = 4;
 
+// ODE's error and debug handlers abort the process by default (e.g. "bSafeNormalize4Fault"
+// when a body's quaternion stops being finite after a diverged contact solve under an
+// extreme load). Throwing instead turns that into a run that stops with exit 1 and a
+// message naming what to change, never a crash.
+[[noreturn]] void throw_ode_error(int errnum, const char* msg, va_list ap) {
+  char text[512];
+  std::vsnprintf(text, sizeof text, msg ? msg : "", ap);
+  throw std::runtime_error("ode: internal error " + std::to_string(errnum) + " (" + text +
+                           "): the contact solve diverged and the state is no longer finite. Reduce the time "
+                           "step (time_step), raise engine.solver_iterations, or lower loading.max_stress");
+}
+
 void init_ode_for_this_thread() {
   static std::once_flag once;
-  std::call_once(once, [] { dInitODE2(0); });
+  std::call_once(once, [] {
+    dInitODE2(0);
+    dSetErrorHandler(&throw_ode_error);
+    dSetDebugHandler(&throw_ode_error);
+  });
   thread_local bool allocated = false;
   if (!allocated) {
     dAllocateODEDataForThread(dAllocateMaskAll);
