@@ -269,3 +269,24 @@ TEST(OdeEngine, BadOptionsAreConfigErrors) {
   Config c2(o2);
   EXPECT_THROW(make_ode_engine(c2, flat), ConfigError);
 }
+
+// ODE's error and debug handlers abort the process by default; a state that stops being
+// finite inside a step (here an angular velocity so large that the quaternion update
+// overflows) must surface as an exception the run turns into exit 1 with advice.
+TEST(OdeEngine, InternalErrorThrowsInsteadOfAborting) {
+  auto e = make_engine(json::object(), {0, 0, 0});
+  Container c;
+  c.lx = c.ly = 10e-3;
+  c.height = 10e-3;
+  e->set_container(c);
+  Grain g = grain(1, Shape::box({1e-3, 0.7e-3, 0.5e-3}), {5e-3, 5e-3, 5e-3}, Quat::from_axis_angle({1, 2, 3}, 0.7));
+  g.angular_velocity = {1e300, -7e299, 4e299};
+  e->add_grain(g);
+  try {
+    run(*e, 10);
+    FAIL() << "ODE took an angular velocity of 1e300 rad/s without an internal error";
+  } catch (const std::runtime_error& err) {
+    EXPECT_NE(std::string(err.what()).find("ode: internal error"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("time_step"), std::string::npos) << err.what();
+  }
+}
