@@ -189,6 +189,8 @@ class Extremes : public ::testing::TestWithParam<Registered> {
   const std::string& engine() const { return GetParam().name; }
   int dim() const { return GetParam().dimension; }
 };
+// Cases whose scene exists in 3D only (the single_grain scene).
+class Extremes3D : public Extremes {};
 
 // ---------------------------------------------------------------- time step
 // An explicit engine (a finite stable bound) runs at its bound without reduction; twice past
@@ -365,8 +367,7 @@ TEST_P(Extremes, GrainLoadedByASingleContact) {
 
 // A grain between two plates: both contacts and the centroid on one line. The plane holds
 // the line (a meridian split, as a Brazilian test): one event, two pieces.
-TEST_P(Extremes, CollinearContacts) {
-  if (dim() != 3) GTEST_SKIP() << "single_grain scene is 3D";
+TEST_P(Extremes3D, CollinearContacts) {
   if (!has_model("stress", 3)) GTEST_SKIP() << "needs the stress model";
   const Outcome r = run_case(src("scenarios/single_grain_pd.json") + " --set engine.type=" + engine() +
                              " --set fragments.type=" + builder_for(engine(), 3) +
@@ -448,8 +449,8 @@ const std::string kNoBalanceScreening =
 
 // Zhu & Zhao 2019 §5's crushing limit: a grain of exactly 0.3 mm is analysed (it used to be
 // screened out by round-off) and crushed by peridynamics before the ramp ends.
-TEST_P(Extremes, PeridynamicsGrainAtTheCrushingLimit) {
-  if (dim() != 3 || !has_model("peridynamics", 3)) GTEST_SKIP() << "peridynamics single grain is 3D";
+TEST_P(Extremes3D, PeridynamicsGrainAtTheCrushingLimit) {
+  if (!has_model("peridynamics", 3)) GTEST_SKIP() << "needs the peridynamics model";
   const Outcome r = run_case(src("scenarios/single_grain_pd.json") + " --set engine.type=" + engine() +
                              " --set fragments.type=" + builder_for(engine(), 3) +
                              " --set scene.diameter=0.3e-3 --set breakage.spacing_fraction=0.15"
@@ -465,8 +466,8 @@ TEST_P(Extremes, PeridynamicsGrainAtTheCrushingLimit) {
 
 // A lattice far below peridynamics' minimum point count (spacing 0.4 d: 7 points against
 // min_points 100): every analysis reports too_few_points, the grain stays whole, exit 0.
-TEST_P(Extremes, PeridynamicsFarBelowTheMinimumPointCount) {
-  if (dim() != 3 || !has_model("peridynamics", 3)) GTEST_SKIP() << "peridynamics single grain is 3D";
+TEST_P(Extremes3D, PeridynamicsFarBelowTheMinimumPointCount) {
+  if (!has_model("peridynamics", 3)) GTEST_SKIP() << "needs the peridynamics model";
   const Outcome r = run_case(src("scenarios/single_grain_pd.json") + " --set engine.type=" + engine() +
                              " --set fragments.type=" + builder_for(engine(), 3) +
                              " --set breakage.spacing_fraction=0.4 --set loading.max_stress=4e6"
@@ -482,6 +483,8 @@ TEST_P(Extremes, PeridynamicsFarBelowTheMinimumPointCount) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Extremes, ::testing::ValuesIn(all_engines()),
+                         [](const auto& info) { return param_name(info.param); });
+INSTANTIATE_TEST_SUITE_P(Registry, Extremes3D, ::testing::ValuesIn(engines_of(3)),
                          [](const auto& info) { return param_name(info.param); });
 
 }  // namespace
