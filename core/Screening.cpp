@@ -17,7 +17,10 @@ ScreeningSettings zhu_zhao_screening() {
 ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s,
                        double threshold_force) {
   ScreeningResult r;
-  if (g.shape->equivalent_diameter() < s.min_diameter) {
+  // "Equivalent diameter >= crushing limit" (Zhu & Zhao 2019 §5): a grain of exactly the
+  // limit size must pass, but cbrt(6V/π) of a 0.3 mm sphere comes out 8e-20 m below 0.3 mm;
+  // compare with a relative tolerance far below any physical size difference.
+  if (g.shape->equivalent_diameter() < s.min_diameter * (1.0 - 1e-12)) {
     r.reason = "too_small";
     return r;
   }

@@ -47,6 +47,12 @@ std::vector<Material> materials_from(const Config& root) {
     mat.wall_friction = m.number("wall_friction", mat.wall_friction, 0.0);
     mat.rolling_friction = m.number("rolling_friction", mat.rolling_friction, 0.0);
     mat.restitution = m.number("restitution", mat.restitution, 0.0, 1.0);
+    // No built-in engine models restitution (Bullet and ODE contacts are perfectly plastic,
+    // lsdem's energy loss is its contact damping): a value other than 0 would be ignored.
+    if (mat.restitution != 0.0)
+      m.fail("restitution",
+             "no engine models a coefficient of restitution, so only 0 is accepted (Zhu & Zhao 2019 Table 1); "
+             "on lsdem the contact damping sets it (engine.damping_ratio, Harmon et al. 2020 Table 2)");
     out.push_back(mat);
   }
   return out;

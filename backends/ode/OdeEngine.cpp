@@ -9,10 +9,10 @@
 #include <ode/ode.h>
 
 #include <algorithm>
-#include <cstdarg>
-#include <cstdio>
 #include <array>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -36,26 +36,24 @@ namespace {
 
 constexpr unsigned long kGrainBit = 1, kWallBit = 2, kPlatenBit = 4;
 
-// ODE reports an internal error (a failed assertion such as a quaternion it cannot
-// normalise) through these handlers and then calls abort(): crumble's run would die with
-// signal 6 and lose its outputs. The handlers throw instead, so the run ends with exit 1
-// naming the error and every output written.
-[[noreturn]] void ode_failure(const char* kind, int num, const char* msg, va_list ap) {
+// ODE's error and debug handlers abort the process by default (e.g. "bSafeNormalize4Fault"
+// when a body's quaternion stops being finite after a diverged contact solve under an
+// extreme load). Throwing instead turns that into a run that stops with exit 1 and a
+// message naming what to change, never a crash.
+[[noreturn]] void throw_ode_error(int errnum, const char* msg, va_list ap) {
   char text[512];
-  std::vsnprintf(text, sizeof text, msg, ap);
-  throw std::runtime_error(std::string("ode: ") + kind + " " + std::to_string(num) + ": " + text +
-                           " (the bodies' state left ODE's valid range: lower time_step or raise "
-                           "engine.solver_iterations)");
+  std::vsnprintf(text, sizeof text, msg ? msg : "", ap);
+  throw std::runtime_error("ode: internal error " + std::to_string(errnum) + " (" + text +
+                           "): the contact solve diverged and the state is no longer finite. Reduce the time "
+                           "step (time_step), raise engine.solver_iterations, or lower loading.max_stress");
 }
-void ode_error(int num, const char* msg, va_list ap) { ode_failure("internal error", num, msg, ap); }
-void ode_debug(int num, const char* msg, va_list ap) { ode_failure("internal assertion", num, msg, ap); }
 
 void init_ode_for_this_thread() {
   static std::once_flag once;
   std::call_once(once, [] {
     dInitODE2(0);
-    dSetErrorHandler(&ode_error);
-    dSetDebugHandler(&ode_debug);
+    dSetErrorHandler(&throw_ode_error);
+    dSetDebugHandler(&throw_ode_error);
   });
   thread_local bool allocated = false;
   if (!allocated) {

@@ -52,6 +52,15 @@ TEST(Screening, SizeLimit) {
   EXPECT_TRUE(screen(g, cs, s).selected);
 }
 
+// A grain of exactly the crushing limit passes (Zhu & Zhao 2019 §5: d_e >= 0.3 mm): cbrt(6V/π)
+// of a 0.3 mm sphere is 8e-20 m short of 0.3 mm and was screened out as too small.
+TEST(Screening, GrainAtTheCrushingLimitIsSelected) {
+  const Loaded g = grain(0.3e-3, 0);
+  std::vector<Contact> cs{contact({0, 0, 1.5e-4}, {0, 0, -100}), contact({0, 0, -1.5e-4}, {0, 0, 100})};
+  EXPECT_TRUE(screen(g, cs, kZhuZhao).selected) << screen(g, cs, kZhuZhao).reason;
+  EXPECT_STREQ(screen(grain(0.2999e-3, 0), cs, kZhuZhao).reason, "too_small");
+}
+
 TEST(Screening, ForceThreshold) {
   const Loaded g = grain(2e-3, 80);
   std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -79}), contact({0, 0, -1e-3}, {0, 0, 79})};
