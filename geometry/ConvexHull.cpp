@@ -499,10 +499,12 @@ std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) 
   // thin plate cut at a shallow angle, a wedge) the inset faces meet far from the
   // vertex, beyond the opposite faces: the moved vertex leaves the solid (it flew 17 mm
   // out of a 0.5 mm fragment, and the engine saw a contact 30 diameters deep). Any moved
-  // vertex more than 10 % of `distance` outside an inset face plane (the round meshes of
-  // the grains stay within 2 %) sends the whole hull to the exact inset instead.
+  // vertex outside the original hull (more than `distance` outside an inset face plane:
+  // the inflated hull would stick out by more than the margin itself) sends the whole hull
+  // to the exact inset instead. Round grains stay within 2 % of `distance`, alpha-shape
+  // fragments of the peridynamics runs within 30 %: they keep the least-squares result.
   const std::vector<FacePlane> planes = face_planes(convex);
-  const double slack = 0.1 * distance;
+  const double slack = distance;
   for (const auto& x : out)
     for (const auto& p : planes)
       if (dot(p.n, x) > p.h - distance + slack)
