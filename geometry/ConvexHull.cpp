@@ -384,6 +384,82 @@ double convex_inradius_about_centroid(const TriMesh& convex) {
   return r;
 }
 
+namespace {
+
+struct FacePlane {
+  Vec3 n;      // unit outward normal
+  double h;    // n·x = h on the face
+};
+
+std::vector<FacePlane> face_planes(const TriMesh& convex) {
+  std::vector<FacePlane> planes;
+  planes.reserve(convex.triangles.size());
+  for (const auto& t : convex.triangles) {
+    const Vec3 n = cross(convex.vertices[t[1]] - convex.vertices[t[0]], convex.vertices[t[2]] - convex.vertices[t[0]]);
+    const double len = norm(n);
+    if (!(len > 0)) continue;
+    planes.push_back({n / len, dot(n / len, convex.vertices[t[0]])});
+  }
+  return planes;
+}
+
+// The exact inset (erosion) of a convex polyhedron: the vertices of ∩_j {n_j·x <= h_j −
+// distance}, found as the convex hull of the dual points n_j / (h_j − distance − n_j·o)
+// about the interior point o (the polar duality of a convex polytope: each face of the
+// dual hull is a vertex of the inset polytope, dual points inside the hull are face
+// planes the inset drops). o is strictly inside every inset plane (distance < inradius).
+std::vector<Vec3> exact_inset(const std::vector<FacePlane>& planes, const Vec3& o, double distance) {
+  std::vector<Vec3> dual;
+  dual.reserve(planes.size());
+  double qmax = 0;
+  for (const auto& p : planes) {
+    const double e = p.h - distance - dot(p.n, o);
+    if (!(e > 0)) throw std::invalid_argument("inset_convex_vertices: the centroid is not inside an inset face plane");
+    dual.push_back(p.n / e);
+    qmax = std::max(qmax, norm(dual.back()));
+  }
+  // Coplanar triangles of one face give (nearly) the same dual point; convex_hull() is
+  // not reliable on such near-duplicates (a hull that leaves points outside was seen), so
+  // keep one of each.
+  std::vector<Vec3> distinct;
+  for (const auto& q : dual) {
+    bool seen = false;
+    for (const auto& u : distinct)
+      if (norm(u - q) <= 1e-9 * qmax) {
+        seen = true;
+        break;
+      }
+    if (!seen) distinct.push_back(q);
+  }
+  const TriMesh dh = convex_hull(distinct);
+  std::vector<Vec3> out;
+  out.reserve(dh.triangles.size());
+  for (const auto& t : dh.triangles) {
+    const Vec3 a = dh.vertices[t[0]];
+    const Vec3 m = cross(dh.vertices[t[1]] - a, dh.vertices[t[2]] - a);
+    const double k = dot(m, a);  // > 0: the origin is inside the dual hull
+    if (!(k > 0)) throw std::invalid_argument("inset_convex_vertices: degenerate dual hull");
+    out.push_back(o + m / k);
+  }
+  // Coplanar dual triangles give the same primal vertex up to rounding: keep one.
+  Aabb box;
+  for (const auto& v : out) box.extend(v);
+  const double tol = 1e-9 * std::max(norm(box.size()), distance);
+  std::vector<Vec3> unique;
+  for (const auto& v : out) {
+    bool seen = false;
+    for (const auto& u : unique)
+      if (norm(u - v) <= tol) {
+        seen = true;
+        break;
+      }
+    if (!seen) unique.push_back(v);
+  }
+  return unique;
+}
+
+}  // namespace
+
 std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) {
   if (!(distance >= 0) || !std::isfinite(distance))
     throw std::invalid_argument("inset_convex_vertices: distance must be finite and >= 0");
@@ -392,6 +468,7 @@ std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) 
     throw std::invalid_argument("inset_convex_vertices: inset distance " + fmt_num(distance) +
                                 " is not smaller than the distance from the centroid to the nearest face (" +
                                 fmt_num(inradius) + ")");
+  if (distance == 0) return convex.vertices;
   // Per vertex, the displacement d minimising Σ_j (n_j·d + distance)² over its incident
   // triangles j (normal equations, lightly regularised so that a vertex whose faces are
   // nearly coplanar moves along their common normal and not sideways).
@@ -418,6 +495,20 @@ std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance) 
     const Vec3& b = rhs[v];
     out[v] += Vec3{dot(b, cross(c1, c2)), dot(c0, cross(b, c2)), dot(c0, cross(c1, b))} / det;
   }
+  // The per-vertex solution only looks at a vertex's own faces. At an acute vertex (a
+  // thin plate cut at a shallow angle, a wedge) the inset faces meet far from the
+  // vertex, beyond the opposite faces: the moved vertex leaves the solid (it flew 17 mm
+  // out of a 0.5 mm fragment, and the engine saw a contact 30 diameters deep). Any moved
+  // vertex outside the original hull (more than `distance` outside an inset face plane:
+  // the inflated hull would stick out by more than the margin itself) sends the whole hull
+  // to the exact inset instead. Round grains stay within 2 % of `distance`, alpha-shape
+  // fragments of the peridynamics runs within 30 %: they keep the least-squares result.
+  const std::vector<FacePlane> planes = face_planes(convex);
+  const double slack = distance;
+  for (const auto& x : out)
+    for (const auto& p : planes)
+      if (dot(p.n, x) > p.h - distance + slack)
+        return exact_inset(planes, polyhedron_mass_properties(convex).centroid, distance);
   return out;
 }
 

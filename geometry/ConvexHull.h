@@ -11,11 +11,15 @@ namespace crumble {
 TriMesh convex_hull(const std::vector<Vec3>& points);
 
 // The vertices of the convex polyhedron `convex` (a convex_hull() result) moved so that
-// every face plane lies `distance` further inside: each vertex takes the least-squares
-// displacement over the planes of its incident faces, which is exact where three faces
-// meet and close for the nearly symmetric vertices of round meshes (more faces meeting).
-// The vertex count stays the same — what engines with a collision margin need (the hull
-// of these points, inflated by `distance`, is the original surface). Throws
+// every face plane lies `distance` further inside — what engines with a collision margin
+// need (the hull of these points, inflated by `distance`, is the original surface up to
+// rounded edges). Each vertex takes the least-squares displacement over the planes of its
+// incident faces, which is exact where three faces meet and close for the nearly
+// symmetric vertices of round meshes (the vertex count stays the same). When that puts
+// any vertex outside `convex` itself (acute vertices of thin fragments: the least-squares
+// point can land far outside the solid), the result is the exact inset instead, the
+// vertices of ∩ {n_j·x <= h_j − distance} (their count differs). Every returned point is
+// inside `convex` (n_j·x <= h_j): the inflated hull sticks out by at most `distance`. Throws
 // std::invalid_argument when `distance` is negative or not smaller than the distance from
 // the centroid to the nearest face plane (convex_inradius_about_centroid).
 std::vector<Vec3> inset_convex_vertices(const TriMesh& convex, double distance);

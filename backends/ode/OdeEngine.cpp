@@ -639,6 +639,21 @@ struct OdeEngine::Impl {
     std::array<dContactGeom, kMax> cg{};
     const int max_pts = opt.contacts_per_pair;
     int n = dCollide(o1, o2, max_pts, cg.data(), sizeof(dContactGeom));
+    // ODE's contact is "move body 1 along the unit normal by depth" (dContactGeom): a
+    // point without a finite unit normal fixes no direction. libccd returns a zero normal
+    // with depth ~1e-16 for two fragments of one grain born face to face on their cut;
+    // as a joint it turns the solver's velocities into NaN and ODE aborts the process
+    // (dNormalize4 assertion). Such points are dropped.
+    int valid = 0;
+    for (int k = 0; k < n; ++k) {
+      const dContactGeom& q = cg[k];
+      const double nl = std::sqrt(q.normal[0] * q.normal[0] + q.normal[1] * q.normal[1] + q.normal[2] * q.normal[2]);
+      if (!std::isfinite(q.depth) || !std::isfinite(q.pos[0]) || !std::isfinite(q.pos[1]) || !std::isfinite(q.pos[2]) ||
+          !(std::abs(nl - 1) <= 1e-6))
+        continue;
+      cg[valid++] = q;
+    }
+    n = valid;
     if (n <= 0) return;
     if (n == 1 && max_pts > 1 && t1->convex && t2->convex) {
       std::array<dContactGeom, kMax> more{};

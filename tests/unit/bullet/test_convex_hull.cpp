@@ -1,6 +1,7 @@
 // geometry/ConvexHull: closed, outward, extreme points only; exact volume on a cube.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -166,4 +167,65 @@ TEST(ConvexHull, InsetMovesEveryFacePlaneInwardsByTheDistance) {
   EXPECT_NEAR(convex_inradius_about_centroid(box), 0.5, 1e-15);
   EXPECT_THROW(inset_convex_vertices(box, 0.5), std::invalid_argument);
   EXPECT_THROW(inset_convex_vertices(box, -0.1), std::invalid_argument);
+}
+
+TEST(ConvexHull, InsetOfAThinFragmentStaysInsideEveryFace) {
+  // The convex hull of a stress-model fragment (Bullet + stress + alpha_shape on
+  // oedometer_zhu_zhao_quick): d_e 0.52 mm, 0.09 mm thick, cut at a shallow angle. The
+  // per-vertex least-squares inset moved one acute vertex 916 margins (4.8 mm) outside
+  // the solid, and Bullet then reported a floor contact 30 diameters deep.
+  const std::vector<Vec3> pts = {
+      {-0.00084135038216666142, -0.00039789298952101618, 4.4639953768088464e-05},
+      {-0.0008408294580250379, -0.0003934629200361044, 4.325504945076105e-05},
+      {-0.00083956749838172287, -0.00039789298952101618, 5.0915966813035564e-05},
+      {-0.00083716964661249631, -0.00038388140936565556, 4.9176748708668216e-05},
+      {-0.00083707135654497507, -0.00041216189641390358, 4.9335785378673935e-05},
+      {-0.00083406084570392342, -0.00042004351611927719, 5.420689424299579e-05},
+      {-0.00083065741849693063, -0.00042895380422542056, 5.4916337059299959e-05},
+      {-0.00082994575093643262, -0.00043081697408749512, 5.5891192414726958e-05},
+      {-0.0006899196804409166, 1.6240069138121826e-06, -7.6131365090038124e-05},
+      {-0.0006899196804409166, 1.6240069138121826e-06, 6.0583305754087236e-06},
+      {-0.00059971067149482138, 0.00011328457275528387, -0.0001079951923749058},
+      {-0.0005126622800441928, 0.00022103293135631067, -1.3040117038831409e-05},
+      {-0.00048354195767539719, -0.00046823605871419607, 8.1082172555196688e-05},
+      {-0.00043895456303601345, 0.00027707798408393351, -1.6262913068025143e-05},
+      {-0.00038190614549639379, 0.00026611818493353537, -0.00014788428165592857},
+      {-0.00016626143029672475, 0.00032526260399221713, -0.00015813511259049249},
+      {-7.4160477163066934e-05, 0.0003821841234250789, -9.1126400239729713e-06},
+      {-1.4845575007115084e-05, 0.00038343925770044943, -5.8266558306079754e-06},
+      {7.4056569527281208e-05, 0.0003284947107054367, -0.0001496733473600168},
+      {0.00030640531131873397, 0.00026832257157383463, -0.00012141076854573917},
+      {0.00037222860083336847, 0.00028096814639627204, 3.045587078491506e-05},
+      {0.00038413259551775021, 0.00027246900252261022, 3.228879632933132e-05},
+      {0.00048389998615678805, 0.00014897708723132371, -7.6540556359930805e-05},
+      {0.00060294447818872896, 1.6240069138121826e-06, -2.5092218908869709e-05},
+      {0.00060294447818872896, 1.6240069138121826e-06, 8.1350151414238852e-05},
+      {0.00068107553768510126, -0.00058751166997279803, 0.00016489943557463737},
+      {0.00070459635126351799, -0.00026450405181607616, 0.00012295601316145713},
+      {0.00072668066946370686, -0.00039789298952101618, 0.00014212870223882963},
+      {0.00072855212052663407, -0.00032722106997356404, 8.4194764267085315e-05},
+      {0.0007366779820176737, -0.00039789298952101618, 0.00010693669223057642},
+  };
+  const TriMesh h = convex_hull(pts);
+  expect_valid(h);
+  const double d = 0.000520108;  // equivalent diameter of the fragment
+  const double inradius = convex_inradius_about_centroid(h);
+  EXPECT_NEAR(2 * inradius, 9.19e-5, 1e-7);
+  const double margin = std::min(0.01 * d, 0.5 * inradius);  // BulletEngine's rule
+  const auto in = inset_convex_vertices(h, margin);
+  ASSERT_GE(in.size(), 4u);
+  // Every inset vertex lies at least `margin` inside every face plane (rounding: 1e-9 d),
+  // so the inset hull inflated by the margin stays inside the fragment.
+  double worst = -1e300;
+  for (const auto& p : in) worst = std::max(worst, max_plane_distance(h, p));
+  EXPECT_LE(worst, -margin + 1e-9 * d);
+  // And it is the inset, not a shrunken copy: the nearest face plane is reached exactly.
+  EXPECT_NEAR(worst, -margin, 1e-9 * d);
+  // The inflated inset loses only the edges' rounding: volume of the inset hull close to
+  // that of the exact erosion's lower bound V − A·margin (A the surface area).
+  const TriMesh hi = convex_hull(in);
+  double area = 0;
+  for (const auto& t : h.triangles)
+    area += 0.5 * norm(cross(h.vertices[t[1]] - h.vertices[t[0]], h.vertices[t[2]] - h.vertices[t[0]]));
+  EXPECT_GE(polyhedron_mass_properties(hi).volume, polyhedron_mass_properties(h).volume - area * margin);
 }
