@@ -25,6 +25,7 @@
 
 #include "geometry/Format.h"
 #include "scenarios/RunPipeline.h"
+#include "scenarios/TableCells.h"
 #include "scenarios/Writers.h"
 
 namespace crumble {
@@ -153,25 +154,7 @@ std::vector<Combination> combinations(const std::vector<VaryAxis>& axes) {
 
 namespace {
 
-std::string fmt(double v, int prec = 4) {
-  if (!std::isfinite(v)) return "";
-  std::ostringstream os;
-  os << std::setprecision(prec) << v;
-  return os.str();
-}
-
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
-  return q + "\"";
-}
-
-std::string md_cell(std::string s) {
-  for (auto& c : s)
-    if (c == '|' || c == '\n') c = c == '|' ? '/' : ' ';
-  return s.empty() ? "—" : s;
-}
+std::string fmt(double v, int prec = 4) { return table_number(v, prec); }
 
 double num(const Json& j, const std::string& key) {
   if (j.is_object() && j.contains(key) && j[key].is_number()) return j[key].get<double>();
