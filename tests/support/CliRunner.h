@@ -2,6 +2,8 @@
 #pragma once
 #include <sys/wait.h>
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -24,6 +26,17 @@ inline CliResult run_cli(const std::string& args) {
   while (p && fgets(buf, sizeof buf, p)) out += buf;
   const int st = p ? pclose(p) : -1;
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+// Writes `text` to $TMPDIR/<suite>/<current test>/<name> and returns the path: one folder per
+// test, because ctest runs the tests of one program in parallel.
+inline std::string scenario_file(const std::string& suite, const std::string& name, const std::string& text) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / suite / (info ? info->name() : "any");
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path f = dir / name;
+  std::ofstream(f) << text;
+  return f.string();
 }
 
 inline std::string slurp(const std::filesystem::path& p) {

@@ -19,12 +19,7 @@ using Result = crumble::testing_support::CliResult;
 Result run(const std::string& args) { return crumble::testing_support::run_cli(args); }
 
 std::string scenario_file(const std::string& name, const std::string& text) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / "crumble_cli_test" / (info ? info->name() : "any");
-  fs::create_directories(dir);
-  const fs::path f = dir / name;
-  std::ofstream(f) << text;
-  return f.string();
+  return crumble::testing_support::scenario_file("crumble_cli_test", name, text);
 }
 
 // A valid rigid scenario on the in-house engine (no external dependency).

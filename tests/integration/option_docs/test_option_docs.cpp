@@ -45,14 +45,8 @@ bool compiled_out(const std::string& name) {
          !crumble::not_compiled_reason("fragment builder", name).empty();
 }
 
-// One folder per test: ctest runs the tests of this program in parallel.
 std::string scenario_file(const std::string& name, const std::string& text) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / "crumble_option_docs_test" / (info ? info->name() : "any");
-  fs::create_directories(dir);
-  const fs::path f = dir / name;
-  std::ofstream(f) << text;
-  return f.string();
+  return crumble::testing_support::scenario_file("crumble_option_docs_test", name, text);
 }
 
 // A valid rigid 3D scenario on the in-house engine, with Bullet's option in the engine section.
