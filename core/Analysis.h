@@ -10,7 +10,7 @@ namespace crumble {
 // Returns NaN with fewer than two usable pairs.
 double loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
 
-// seeds/000 eq. 17: N(d > d0) ∝ d0^(−D). D from the least-squares fit of log N(d > d0)
+// Zhu & Zhao 2019 eq. 17: N(d > d0) ∝ d0^(−D). D from the least-squares fit of log N(d > d0)
 // against log d0 at `sieves` geometric sieve sizes between the smallest and largest
 // diameter; sieves retaining fewer than max(10, n/1000) grains are left out. NaN when all grains have
 // one size.

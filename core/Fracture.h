@@ -8,7 +8,7 @@
 
 namespace crumble {
 
-// What peridynamics yields (seeds/000 §3.2): the lattice points of the parent, the
+// What peridynamics yields (Zhu & Zhao 2019 §3.2): the lattice points of the parent, the
 // cluster each belongs to (fines already attached to the nearest major piece), which of
 // them lie on the original surface, and the fracture-surface points of each cluster
 // (midpoints of broken nearest-neighbour bonds).
@@ -32,7 +32,7 @@ struct CutPlane {
   double signed_distance(const Vec3& p) const { return dot(normal, p) - offset; }
 };
 
-// What the stress criteria yield (seeds/004 §3): the parent is cut by the surfaces; each
+// What the stress criteria yield (Harmon et al. 2020 §3): the parent is cut by the surfaces; each
 // non-empty cell of the arrangement is a child.
 struct CuttingSurfaces {
   std::vector<CutPlane> planes;

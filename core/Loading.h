@@ -1,4 +1,4 @@
-// Platen loading: a stress ramp (force-controlled platen with a mass, as in seeds/000 §5)
+// Platen loading: a stress ramp (force-controlled platen with a mass, as in Zhu & Zhao 2019 §5)
 // or a constant strain rate (kinematic platen), stopped at a stress or force limit.
 #pragma once
 #include <string>

@@ -31,7 +31,7 @@ struct ScreeningResult {
   double unbalanced_moment_ratio = 0;
 };
 
-// `contacts` are the contacts on `g` (force on g). seeds/000 §5: unbalanced force ratio =
+// `contacts` are the contacts on `g` (force on g). Zhu & Zhao 2019 §5: unbalanced force ratio =
 // |Σ F| / mean |F|; unbalanced moment ratio = |Σ (x − x_fix) × F| / mean |x − x_fix|·|F|
 // about the point of the largest force (the zone a peridynamic analysis fixes) — the paper
 // says "average magnitude of moment"; see Screening.cpp for why the lever-arm form. Gravity

@@ -25,7 +25,7 @@ struct TimeStepRule {
 };
 
 struct SimulationSettings {
-  // seeds/000 §5: dt by stress level; the last rule applies above all bounds.
+  // Zhu & Zhao 2019 §5: dt by stress level; the last rule applies above all bounds.
   std::vector<TimeStepRule> time_steps{{1e300, 5e-5}};
   long max_steps = 0;                 // 0 = no limit (the loading decides)
   long sample_every = 100;            // steps between series samples

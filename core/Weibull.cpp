@@ -10,10 +10,10 @@ double weibull_sample(const WeibullParams& p, double d, double u) {
   if (!(d > 0)) throw std::invalid_argument("weibull_sample: size must be > 0");
   const double size = std::pow(d / p.d0, -3.0 / p.modulus);
   if (p.variant == "linear") {
-    // seeds/000 eq. 12
+    // Zhu & Zhao 2019 eq. 12
     return p.sigma0 * (u - p.b) / p.a * size;
   }
-  // seeds/004 eq. 12 (P_f = u; u < 1 so the log is finite)
+  // Harmon et al. 2020 eq. 12 (P_f = u; u < 1 so the log is finite)
   u = std::clamp(u, 0.0, 1.0 - 1e-16);
   return p.sigma0 * std::pow(-std::pow(p.d0 / d, 3.0) * std::log1p(-u), 1.0 / p.modulus);
 }
@@ -26,7 +26,7 @@ double weibull_cdf(const WeibullParams& p, double d, double s) {
     const double u = p.b + p.a * s / (p.sigma0 * size);
     return std::clamp(1.0 - u, 0.0, 1.0);
   }
-  // seeds/004 eq. 11
+  // Harmon et al. 2020 eq. 11
   if (s <= 0) return 0;
   return 1.0 - std::exp(-std::pow(d / p.d0, 3.0) * std::pow(s / p.sigma0, p.modulus));
 }

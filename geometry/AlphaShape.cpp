@@ -1,4 +1,4 @@
-// Alpha-shape polyhedra (seeds/000 §3.2; recipe of METHODS.md §3) and the CGAL convex
+// Alpha-shape polyhedra (Zhu & Zhao 2019 §3.2; recipe of METHODS.md §3) and the CGAL convex
 // hull used by the alpha-shape FragmentBuilder. The single translation unit holding
 // CGAL's Alpha_shape_3 (it compiles slowly).
 #include "geometry/AlphaShape.h"
@@ -55,7 +55,7 @@ void check_points(const std::vector<Vec3>& points, const char* who) {
 }
 
 // Coordinates the combinatorics are computed in. Points of a cubic lattice of spacing s
-// and midpoints of its bonds (the PointClusters of seeds/000 §3.2) are exactly
+// and midpoints of its bonds (the PointClusters of Zhu & Zhao 2019 §3.2) are exactly
 // coplanar, collinear and cospherical in many ways, but not in floating point: CGAL's
 // exact predicates then see slivers of ~1e-16 relative thickness, zero-area facets that
 // pass every exact test and fold as soon as the coordinates are rounded (rescaling,

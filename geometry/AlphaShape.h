@@ -1,4 +1,4 @@
-// Alpha-shape polyhedra from point clouds (seeds/000 §3.2, METHODS.md §3).
+// Alpha-shape polyhedra from point clouds (Zhu & Zhao 2019 §3.2, METHODS.md §3).
 //
 // Pure geometry (no core/ include), but implemented with CGAL: it is compiled into the
 // crumble_alpha_shape library only (CRUMBLE_WITH_CGAL), not into crumble_geometry.
@@ -41,7 +41,7 @@ struct AlphaShapeResult {
 // upwards from (start_spacings * spacing)² and returns the first alpha whose REGULAR
 // facets, oriented towards the exterior cells, form a closed, manifold, connected,
 // genus-0 (V - E + F = 2), non-self-intersecting polyhedron without zero-area facets
-// (seeds/000 §3.2). Enclosed exterior cells (internal voids) are counted as solid.
+// (Zhu & Zhao 2019 §3.2). Enclosed exterior cells (internal voids) are counted as solid.
 // Points of a cubic lattice of the given spacing and midpoints of its bonds are
 // processed in exact integer coordinates (see AlphaShape.cpp).
 // Throws std::invalid_argument for fewer than 4 points, non-finite points or bad options.

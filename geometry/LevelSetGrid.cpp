@@ -1,4 +1,4 @@
-// Discrete level sets (seeds/004 §2, Appendix; Kawamoto et al. 2016).
+// Discrete level sets (Harmon et al. 2020 §2, Appendix; Kawamoto et al. 2016).
 //
 // Decisions (METHODS.md §4 leaves them open):
 // - Interpolation: trilinear (2D bilinear) of the node values; outside the grid the value
@@ -16,7 +16,7 @@
 //   area-weighted centre projected onto the zero level) with the cluster's area (length)
 //   as weight. The weights sum to the area of the triangulated zero level. h_s = h gives
 //   about one node per crossed cell; a target count sets h_s from the surface area.
-// - Mass properties: seeds/004 eqs. 24–30 with ε = 1.5 grid spacings. The smoothing biases
+// - Mass properties: Harmon et al. 2020 eqs. 24–30 with ε = 1.5 grid spacings. The smoothing biases
 //   the volume by ≈ 2·(1/6 − 1/π²)·ε²·∫H_mean dA (0.39·ε²/R² relative for a sphere), i.e.
 //   second order in h.
 #include "geometry/LevelSetGrid.h"
@@ -145,7 +145,7 @@ void march_square(const Vec3* p, const double* v, const std::uint64_t* k, Emit& 
 }
 
 double heaviside(double x, double eps) {
-  // seeds/004 eq. 24: smoothed Heaviside of half width ε.
+  // Harmon et al. 2020 eq. 24: smoothed Heaviside of half width ε.
   if (x < -eps) return 0;
   if (x >= eps) return 1;
   return 0.5 * (1 + x / eps + std::sin(kPi * x / eps) / kPi);
@@ -571,7 +571,7 @@ Aabb LevelSetGrid::bounds() const {
 }
 
 MassProperties LevelSetGrid::mass_properties() const {
-  // seeds/004 eqs. 24–30, per unit density, ε = 1.5 h (the paper's 1.5 in grid units).
+  // Harmon et al. 2020 eqs. 24–30, per unit density, ε = 1.5 h (the paper's 1.5 in grid units).
   const double eps = heaviside_width();
   const double dv = dim_ == 3 ? h_ * h_ * h_ : h_ * h_;
   const int nz = dim_ == 3 ? n_[2] : 1;

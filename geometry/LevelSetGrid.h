@@ -1,4 +1,4 @@
-// Discrete signed-distance grid of one shape (seeds/004 §2): negative inside, sampled on
+// Discrete signed-distance grid of one shape (Harmon et al. 2020 §2): negative inside, sampled on
 // a regular grid, interpolated trilinearly (bilinearly in 2D), with surface nodes on the
 // zero level carrying an area (2D: length) weight. Immutable once built and shared by
 // every grain of the shape.
@@ -91,7 +91,7 @@ class LevelSetGrid {
   // Half width ε of the smoothed Heaviside of mass_properties(): 1.5 grid spacings.
   double heaviside_width() const { return 1.5 * h_; }
 
-  // seeds/004 eqs. 24–30: smoothed-Heaviside integrals over the grid (per unit density).
+  // Harmon et al. 2020 eqs. 24–30: smoothed-Heaviside integrals over the grid (per unit density).
   MassProperties mass_properties() const;
 
   // Zero level as a closed triangle mesh (marching cubes / tetrahedra); 2D: use outline().
@@ -121,7 +121,7 @@ class LevelSetGrid {
   // Surface nodes are rebuilt from the new zero level at this grid's node spacing.
   // Throws std::invalid_argument on a size mismatch, non-finite values or no zero level.
   std::shared_ptr<const LevelSetGrid> with_values(std::vector<double> phi) const;
-  // The same zero level with values replaced by the signed distance to it (seeds/004
+  // The same zero level with values replaced by the signed distance to it (Harmon et al. 2020
   // eq. 17's purpose; done by closest points instead of the PDE). CSG results
   // (max(φ1, −φ2), eqs. 14–15) are not distances until reinitialised.
   std::shared_ptr<const LevelSetGrid> reinitialised() const;

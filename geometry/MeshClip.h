@@ -1,4 +1,4 @@
-// Cutting a closed triangle mesh by planes (the CuttingSurfaces of seeds/004 §3 applied
+// Cutting a closed triangle mesh by planes (the CuttingSurfaces of Harmon et al. 2020 §3 applied
 // to polyhedral grains). Pure geometry, implemented with CGAL: compiled into the
 // crumble_alpha_shape library only (CRUMBLE_WITH_CGAL), not into crumble_geometry.
 #pragma once

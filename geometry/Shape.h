@@ -67,7 +67,7 @@ class Shape {
   Vec3 recentring() const { return recentring_; }
 
   // Mass properties per unit density, about the centroid (≈ origin). Exact for the
-  // analytic and polyhedral sources, grid-based (seeds/004 eqs. 24–30) for level sets.
+  // analytic and polyhedral sources, grid-based (Harmon et al. 2020 eqs. 24–30) for level sets.
   const MassProperties& mass_properties() const { return mass_; }
   double volume() const { return mass_.volume; }
   // Diameter of the sphere (3D) or disk (2D) of equal volume (area).

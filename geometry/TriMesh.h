@@ -40,7 +40,7 @@ bool is_closed_oriented_manifold(const TriMesh& mesh, std::string* why = nullptr
 double surface_area(const TriMesh& mesh);
 
 // Icosahedron subdivided `level` times and projected on the unit sphere
-// (level 1: 42 vertices, 80 faces — the grains of seeds/000 §5).
+// (level 1: 42 vertices, 80 faces — the grains of Zhu & Zhao 2019 §5).
 TriMesh icosphere(int level);
 
 }  // namespace crumble

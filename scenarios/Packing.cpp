@@ -323,7 +323,7 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
   }
   SettleResult res;
   if (!spec.settle) return res;
-  // seeds/000 §5: push the cloud down with a plate under a small force until stable.
+  // Zhu & Zhao 2019 §5: push the cloud down with a plate under a small force until stable.
   Engine& e = sim.engine();
   const auto& ss = spec.settle_settings;
   const double area = sim.context().dimension == 2 ? spec.container.lx : spec.container.lx * spec.container.ly;

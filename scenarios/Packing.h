@@ -1,5 +1,5 @@
 // Packings are data: generated (a cloud drawn from a PSD, pushed down by the platen until
-// stable, seeds/000 §5), listed explicitly, or loaded from a packing.json written by an
+// stable, Zhu & Zhao 2019 §5), listed explicitly, or loaded from a packing.json written by an
 // earlier run, so different engines and models start from the identical packing.
 #pragma once
 #include <atomic>
@@ -63,7 +63,7 @@ PackingSpec packing_from_config(const Config& packing, const Config& container, 
 // Scene builders: a whole set-up from a few numbers.
 //   {"type": "single_grain", "diameter": d, "shape": SHAPE (template, default sphere)}:
 //   one grain resting on the floor of a 3d × 3d box, the platen touching its top
-//   (seeds/000 §4.2: a grain crushed between two plates).
+//   (Zhu & Zhao 2019 §4.2: a grain crushed between two plates).
 //   {"type": "jaw_crusher", ...}: the 2D jaw crusher of Harmon et al. 2020 §4 (scenarios/Walls.h).
 PackingSpec scene_from_config(const Config& scene, int dimension, Rng& rng);
 

@@ -33,7 +33,7 @@ std::vector<Material> materials_from(const Config& root) {
     root.fail("materials", "expected at least one material (an empty array would leave every grain without one; "
                            "leave 'materials' out for the default material of Zhu & Zhao 2019, Table 1)");
   if (list.empty()) {
-    // No "materials": one default material (seeds/000 Table 1), recorded in the effective scenario.
+    // No "materials": one default material (Zhu & Zhao 2019 Table 1), recorded in the effective scenario.
     Json& doc = const_cast<Json&>(root.doc());
     doc["materials"] = Json::array({Json::object()});
     list = root.children("materials");

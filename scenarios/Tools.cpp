@@ -37,7 +37,7 @@ using Json = nlohmann::json;
 
 namespace {
 
-// Single-grain crushing (seeds/000 §4.2): the first breakage gives the crushing force,
+// Single-grain crushing (Zhu & Zhao 2019 §4.2): the first breakage gives the crushing force,
 // the characteristic strength F/d² and the fragments.
 class CrushingRecorder : public Observer {
  public:
@@ -88,7 +88,7 @@ class CompressionRecorder : public Observer {
       e_.push_back(std::atof(rows[i][6].c_str()));
       n_.push_back(static_cast<std::size_t>(std::atol(rows[i][7].c_str())));
     }
-    // seeds/000 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
+    // Zhu & Zhao 2019 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
     // over the upper part of the loading (σ ≥ 0.3 σ_max).
     double smax = 0;
     for (double s : stress_) smax = std::max(smax, s);

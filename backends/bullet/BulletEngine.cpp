@@ -60,7 +60,7 @@ const BodyTag* grain_against_wall(const btCollisionObject* b0, const btCollision
 
 // Bullet multiplies the two bodies' friction values; each grain carries √μ so that a pair
 // of the same material gets μ (and a mixed pair √(μa·μb)). Grain–wall pairs take the
-// grain material's wall friction (seeds/000: 0). Bodies not made by crumble keep Bullet's
+// grain material's wall friction (Zhu & Zhao 2019: 0). Bodies not made by crumble keep Bullet's
 // rule.
 btScalar combined_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
   if (const BodyTag* g = grain_against_wall(b0, b1)) return g->wall_friction;
@@ -99,7 +99,7 @@ struct ShapeEntry {
   Vec3 moments;           // principal moments per unit density (SI, m⁵)
 };
 
-// Bullet's PGS solver with Zhu & Zhao's stopping rule (seeds/000 §2.2): stop once the
+// Bullet's PGS solver with Zhu & Zhao's stopping rule (Zhu & Zhao 2019 §2.2): stop once the
 // relative change of the contact impulse vector between two iterations,
 // ε = |f^k − f^(k−1)| / |f^k|, is at most `tolerance` (they kept ε ≲ 2e-4). Bullet's own
 // absolute least-squares residual threshold still applies when set. Records the largest
@@ -252,7 +252,7 @@ struct BulletEngine::Impl {
     world->getDispatchInfo().m_deterministicOverlappingPairs = true;
     btContactSolverInfo& si = world->getSolverInfo();
     si.m_numIterations = opt.solver_iterations;
-    si.m_erp2 = opt.erp;        // seeds/000 eq. 8: v_d = β Δd / Δt on contacts
+    si.m_erp2 = opt.erp;        // Zhu & Zhao 2019 eq. 8: v_d = β Δd / Δt on contacts
     si.m_erp = opt.erp;         // (no joints; kept equal)
     si.m_splitImpulse = 0;      // correction inside the contact impulse, as eq. 8
     si.m_restitution = 0;
@@ -474,7 +474,7 @@ struct BulletEngine::Impl {
     gb->tag.rolling_friction = mat.rolling_friction;
     gb->mass = mat.density * g.shape->volume();
     // Inertia from the shape's exact mass properties (calculateLocalInertia of a hull is a
-    // box estimate); both scaled by mass_scale (seeds/000 §5).
+    // box estimate); both scaled by mass_scale (Zhu & Zhao 2019 §5).
     const double m = gb->mass * opt.mass_scale;
     const Vec3 inertia = gb->entry->moments * (mat.density * opt.mass_scale * scale * scale);
     btRigidBody::btRigidBodyConstructionInfo info(m, nullptr, gb->entry->collision.get(), bt(inertia));

@@ -1,26 +1,26 @@
 // Engine `bullet`: Bullet 3 (double precision) rigid bodies with projected Gauss–Seidel
-// contact dynamics, set up as Zhu & Zhao 2019 (seeds/000 §2.2, §5) ran it. No Bullet
+// contact dynamics, set up as Zhu & Zhao 2019 (§2.2, §5) ran it. No Bullet
 // header appears here: the adapter lives behind a pimpl in BulletEngine.cpp.
 //
 // Scenario options ("engine": {"type": "bullet", ...}), all optional:
 //   sphere_representation  "polyhedron" | "sphere"  default "polyhedron": a Sphere shape
 //                          enters as the convex hull of its mesh (icosphere, 42 vertices at
-//                          the default resolution, as seeds/000 §5) or as an exact sphere
+//                          the default resolution, as Zhu & Zhao 2019 §5) or as an exact sphere
 //   length_scale           1/m, >= 0, default 0 = automatic: the power of two nearest to
 //                          1/d_e of the first grain added (a grain is then ≈ 1 unit)
 //   margin_fraction        (0, 0.1], default 0.01: collision margin per grain as a fraction
 //                          of its equivalent diameter (hulls are inset by it)
-//   solver_iterations      >= 1, default 100: PGS iterations per step (seeds/000: 2000)
+//   solver_iterations      >= 1, default 100: PGS iterations per step (Zhu & Zhao 2019: 2000)
 //   solver_tolerance       [0, 1], default 2e-4: stop the iterations once the contact
 //                          impulses change by at most this fraction between two iterations,
-//                          ε = |f^k − f^(k−1)|/|f^k| (seeds/000 §2.2); 0 = off
+//                          ε = |f^k − f^(k−1)|/|f^k| (Zhu & Zhao 2019 §2.2); 0 = off
 //   solver_residual        [0, 1], default 0 = off: Bullet's own early exit
 //                          (m_leastSquaresResidualThreshold) once no contact's relative
 //                          velocity changes by more than this many length units per step
 //                          (|Δv|·dt·length_scale) in an iteration
-//   erp                    [0, 1], default 0.003: penetration correction β (seeds/000 eq. 8)
+//   erp                    [0, 1], default 0.003: penetration correction β (Zhu & Zhao 2019 eq. 8)
 //   mass_scale             > 0, default 1: grain and platen masses and inertias are
-//                          multiplied by it (seeds/000 §5: 70); weights stay physical
+//                          multiplied by it (Zhu & Zhao 2019 §5: 70); weights stay physical
 //
 // Model, as METHODS.md §2: restitution 0; friction √μ per grain (Bullet multiplies the
 // pair), Material::wall_friction against walls; rolling friction in Bullet's convention

@@ -207,7 +207,7 @@ void LsdemEngine::add_grain(const Grain& g) {
   b.sd->users++;
   b.material = g.material;
   const double rho = ctx_.materials[g.material].density;
-  // Density scaling for quasi-static runs (seeds/000 §5 scales masses by 70): mass and
+  // Density scaling for quasi-static runs (Zhu & Zhao 2019 §5 scales masses by 70): mass and
   // inertia grow, the weight does not (gravity acts on the unscaled mass).
   b.m = rho * g.shape->volume() * s_.mass_scale;
   b.im = 1.0 / b.m;

@@ -1,9 +1,9 @@
-// `lsdem`: the in-house level-set DEM engine (seeds/004 §2; Kawamoto et al. 2016), 2D and 3D.
+// `lsdem`: the in-house level-set DEM engine (Harmon et al. 2020 §2; Kawamoto et al. 2016), 2D and 3D.
 //
 // Grains are rigid bodies carrying a shared LevelSetGrid (signed distance, negative inside)
 // and its surface nodes with area (2D: length) weights. A contact between grains a and b is
 // found by looking up the nodes of the smaller grain (the master) in the other's level set:
-// penetration p_i = −φ_b(x_i), normal n_i = ∇φ_b/|∇φ_b| (seeds/004 eqs. 3–4).
+// penetration p_i = −φ_b(x_i), normal n_i = ∇φ_b/|∇φ_b| (Harmon et al. 2020 eqs. 3–4).
 //
 // Contact law (our decision, METHODS.md §4 leaves it open). Per contact (grain pair, or
 // grain and wall) the overlap is the deepest node penetration δ = max p_i and the normal
@@ -60,11 +60,11 @@ namespace crumble {
 
 struct LsdemSettings {
   std::string contact_law = "linear";  // "linear" | "hertz" (hertz: 3D only)
-  double kn = 4e7;                      // N/m, grain–grain normal stiffness (seeds/004 Table 2)
-  double ks_ratio = 0.6;                // k_s / k_n (seeds/004 Table 2)
+  double kn = 4e7;                      // N/m, grain–grain normal stiffness (Harmon et al. 2020 Table 2)
+  double ks_ratio = 0.6;                // k_s / k_n (Harmon et al. 2020 Table 2)
   double wall_kn = 0;                   // N/m, grain–wall; 0 = kn
-  double damping_ratio = 0.4;           // normal critical-damping ratio ζ (seeds/004 Table 1 C_res)
-  double global_damping = 0;            // C_g, 1/s (seeds/004 Tables 1–2)
+  double damping_ratio = 0.4;           // normal critical-damping ratio ζ (Harmon et al. 2020 Table 1 C_res)
+  double global_damping = 0;            // C_g, 1/s (Harmon et al. 2020 Tables 1–2)
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
   double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged

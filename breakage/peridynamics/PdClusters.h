@@ -1,4 +1,4 @@
-// What a peridynamic analysis leaves behind (seeds/000 §3.2): the pieces are the connected
+// What a peridynamic analysis leaves behind (Zhu & Zhao 2019 §3.2): the pieces are the connected
 // components of the lattice over intact nearest-neighbour bonds.
 #pragma once
 #include <vector>
@@ -17,7 +17,7 @@ struct Components {
 // Union–find over the face (nearest-neighbour) bonds whose `alive` factor is non-zero.
 Components face_components(const Lattice& L, const std::vector<double>& alive);
 
-// Components with at least `min_fraction` of all points ("major pieces"; seeds/000 §3.2
+// Components with at least `min_fraction` of all points ("major pieces"; Zhu & Zhao 2019 §3.2
 // uses 3 % of the parent's volume — every point has the same volume).
 int major_count(const Components& c, double min_fraction);
 

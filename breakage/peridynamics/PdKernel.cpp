@@ -36,7 +36,7 @@ CRUMBLE_PD_INLINE Bond bond(const double* pos, std::int32_t j, double xi, double
   const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
   return {dx, dy, dz, std::sqrt(dx * dx + dy * dy + dz * dz)};
 }
-// Critical stretch (seeds/000 §2.1): a bond stretched beyond sc is broken for good.
+// Critical stretch (Zhu & Zhao 2019 §2.1): a bond stretched beyond sc is broken for good.
 CRUMBLE_PD_INLINE double keep(double e, double r, double sc, double alive) { return e <= sc * r ? alive : 0.0; }
 // Pass-2 bond scale: alive [(a_i θ_i + a_j θ_j) r + kb e] / |Y| (|Y| bounded away from 0).
 CRUMBLE_PD_INLINE double force_scale(double alive, double ati, double atj, double r, double kb, double l) {

@@ -1,4 +1,4 @@
-// The LPS hot loops over CSR rows [i0, i1) (seeds/000 eqs. 1–4, influence function 1).
+// The LPS hot loops over CSR rows [i0, i1) (Zhu & Zhao 2019 eqs. 1–4, influence function 1).
 //
 // Positions are stored per point as 4 doubles (x, y, z, aθ): one 32-byte load fetches all
 // a neighbour contributes to the force pass. Bond factors `alive` (partial-volume weight,

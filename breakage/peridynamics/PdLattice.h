@@ -1,4 +1,4 @@
-// The peridynamic discretisation of a grain (seeds/000 §3.1 stage 2): material points on
+// The peridynamic discretisation of a grain (Zhu & Zhao 2019 §3.1 stage 2): material points on
 // a cubic lattice, and each point's full bond family in CSR form (every point owns the
 // list of its neighbours, so force sums need no atomics and no write races).
 #pragma once
@@ -23,7 +23,7 @@ struct StencilEntry {
 // plain rule; with 3.0002 that is the 122 offsets of |offset| <= 3).
 // partial_volumes = true: every offset whose cell (a unit cube centred on the point)
 // meets the horizon sphere, weighted by the exact fraction of the cell inside it. This is
-// a quadrature of the integrals of seeds/000 eqs. 1, 3, 4 (dV_x'), not a change of the
+// a quadrature of the integrals of Zhu & Zhao 2019 eqs. 1, 3, 4 (dV_x'), not a change of the
 // influence function (still 1): it removes the cubic-lattice anisotropy of the plain rule
 // (its two shear moduli are 0.83 μ and 1.11 μ at δ = 3h; with partial volumes 1.006 μ and
 // 0.996 μ). Cached per horizon factor; thread-safe.

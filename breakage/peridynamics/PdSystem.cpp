@@ -22,7 +22,7 @@ LpsMaterial LpsMaterial::from_young(double young, double poisson, double density
 }
 
 double critical_stretch(double gc, double K, double mu, double horizon) {
-  // seeds/000 eq. 5
+  // Zhu & Zhao 2019 eq. 5
   const double denom = (3.0 * mu + std::pow(0.75, 4) * (K - 5.0 * mu / 3.0)) * horizon;
   if (!(gc > 0) || !std::isfinite(gc))
     throw std::invalid_argument("peridynamics: critical energy release rate G_c must be > 0, got " +
@@ -56,7 +56,7 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
   free_.assign(n, 1.0);
   alive_ = L_.weight;
   for (std::size_t i = 0; i < n; ++i) {
-    // seeds/000 eq. 3: weighted volume m = Σ ω |ξ|² V_j (ω = 1; V_j with its partial-volume weight)
+    // Zhu & Zhao 2019 eq. 3: weighted volume m = Σ ω |ξ|² V_j (ω = 1; V_j with its partial-volume weight)
     double m = 0;
     for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) m += L_.weight[q] * L_.length[q] * L_.length[q];
     m *= V;

@@ -1,4 +1,4 @@
-// The linear peridynamic solid (LPS, seeds/000 eqs. 1–4, influence function 1) on a
+// The linear peridynamic solid (LPS, Zhu & Zhao 2019 eqs. 1–4, influence function 1) on a
 // Lattice, with critical-stretch bond breakage and explicit time integration.
 //
 // Positions are stored as (x, y, z, aθ) per point (PdKernel.h), the rest as structures of
@@ -22,7 +22,7 @@ struct LpsMaterial {
   static LpsMaterial from_young(double young, double poisson, double density);
 };
 
-// seeds/000 eq. 5 (Madenci & Oterkus): critical stretch of the LPS for G_c and horizon δ.
+// Zhu & Zhao 2019 eq. 5 (Madenci & Oterkus): critical stretch of the LPS for G_c and horizon δ.
 double critical_stretch(double gc, double bulk, double shear, double horizon);
 
 class PdSystem {
@@ -34,7 +34,7 @@ class PdSystem {
 
   // Boundary conditions. Fixed points keep zero displacement and velocity. A load adds
   // `total_force` (N, at load factor 1), spread uniformly over `points`; fixed points get
-  // no share (seeds/000 §3.1: "no force will be applied to material points within the
+  // no share (Zhu & Zhao 2019 §3.1: "no force will be applied to material points within the
   // fixed zone").
   void fix(const std::vector<std::int32_t>& points);
   void add_load(const std::vector<std::int32_t>& points, const Vec3& total_force);
@@ -51,7 +51,7 @@ class PdSystem {
   double spectral_dt(int iterations = 60, int threads = 1) const;
 
   // Internal force density f(x) (N/m³) from the current positions; breaks the bonds whose
-  // stretch exceeds the critical stretch (seeds/000 §2.1). `threads` > 1 splits the points.
+  // stretch exceeds the critical stretch (Zhu & Zhao 2019 §2.1). `threads` > 1 splits the points.
   void compute_forces(int threads = 1);
   // One step of velocity Verlet in leapfrog form with mass-proportional damping
   // (rate `damping`, 1/s): v ← ((1 − c dt/2) v + dt a) / (1 + c dt/2); x ← x + dt v,
@@ -74,7 +74,7 @@ class PdSystem {
       pos_[4 * i + 2] = L_.points[i].z + d.z;
     }
   }
-  // Dilation θ_i (seeds/000 eq. 4) from the current positions.
+  // Dilation θ_i (Zhu & Zhao 2019 eq. 4) from the current positions.
   double dilatation(std::int32_t i) const;
   Vec3 current(std::int32_t i) const { return {pos_[4 * i], pos_[4 * i + 1], pos_[4 * i + 2]}; }
   // Partial stress Σ_j t_ij M_ij ⊗ ξ_ij V_j at point i (equals the Cauchy stress for a

@@ -42,7 +42,7 @@ struct RunResult {
   std::vector<double> alive_at_split;  // bond state when the split was first seen
 };
 
-// Lattice points within `radius` of point `centre` (the contact zone, seeds/000 Fig. 4).
+// Lattice points within `radius` of point `centre` (the contact zone, Zhu & Zhao 2019 Fig. 4).
 std::vector<std::int32_t> zone(const Lattice& L, std::int32_t centre, double radius) {
   std::vector<std::int32_t> z;
   const double r2 = radius * radius;
@@ -152,7 +152,7 @@ pd::LpsMaterial analysis_material(const Material& m, const PdOptions& o) {
   return pd::LpsMaterial::from_young(m.young, m.poisson, m.density * o.density_scale);
 }
 
-// seeds/000 eq. 5 with the size correction of eq. 16: s_c = s_c(eq. 5, δ) · √(d / d_ref).
+// Zhu & Zhao 2019 eq. 5 with the size correction of eq. 16: s_c = s_c(eq. 5, δ) · √(d / d_ref).
 // With δ ∝ d the product does not depend on d, so strength depends on G_c only.
 double grain_critical_stretch(double gc, const pd::LpsMaterial& mat, double horizon, double d_e, const PdOptions& o) {
   return pd::critical_stretch(gc, mat.bulk, mat.shear, horizon) * std::sqrt(d_e / o.d_ref);
@@ -385,7 +385,7 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   require(gc > 0 && std::isfinite(gc),
           "grain " + std::to_string(g.id) + " has no critical energy release rate (assign_strength not called?)");
 
-  // Contact forces into the body frame (seeds/000 §3.1).
+  // Contact forces into the body frame (Zhu & Zhao 2019 §3.1).
   struct Local {
     Vec3 point, force;
   };

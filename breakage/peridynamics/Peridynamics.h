@@ -1,4 +1,4 @@
-// Breakage model "peridynamics": Zhu & Zhao 2019 (seeds/000 §2.1, §3, §4; METHODS.md §1).
+// Breakage model "peridynamics": Zhu & Zhao 2019 (§2.1, §3, §4; METHODS.md §1).
 // A grain selected by the screening is discretised on a cubic lattice, loaded by its
 // contact forces (ramped in time, the zone of the largest force fixed) and integrated
 // explicitly with the linear peridynamic solid and critical-stretch bonds until it splits
@@ -51,7 +51,7 @@ namespace crumble {
 
 // Every option, with its scenario key (the "breakage" object) and default.
 struct PdOptions {
-  // Discretisation (seeds/000 §3.1 stage 2).
+  // Discretisation (Zhu & Zhao 2019 §3.1 stage 2).
   double spacing_fraction = 0.062;  // "spacing_fraction": lattice spacing / d_e
   double horizon_factor = 3.0002;   // "horizon_factor": δ / spacing
   bool partial_volumes = false;     // "partial_volumes": neighbour cells weighted by their volume inside δ
@@ -110,9 +110,9 @@ PdOptions pd_options_from_config(const Config& cfg);
 // Checks ranges (std::invalid_argument naming the option).
 void validate(const PdOptions& o);
 
-// seeds/000 eq. 13: G_c = G_c0 ((U − b)/a)² (d/d0)^(−6/ψ) for U in [0, 1).
+// Zhu & Zhao 2019 eq. 13: G_c = G_c0 ((U − b)/a)² (d/d0)^(−6/ψ) for U in [0, 1).
 double pd_sample_gc(const PdOptions& o, double d, double u);
-// seeds/000 eq. 15: G_c of a child of size d_child from a parent of size d_parent.
+// Zhu & Zhao 2019 eq. 15: G_c of a child of size d_child from a parent of size d_parent.
 double pd_child_gc(const PdOptions& o, double gc_parent, double d_child, double d_parent);
 // Screening force (N), eqs. 12/14 with σ ∝ √G_c and F = σ d²:
 // threshold = threshold_force_ref · √(G_c / G_c0) · (d / d0)².
@@ -152,7 +152,7 @@ class PeridynamicsModel final : public BreakageModel {
 
 std::unique_ptr<BreakageModel> make_peridynamics(const Config& cfg, const EngineContext& ctx);
 
-// Uniaxial crushing of one grain (seeds/000 §4.2, Fig. 9): the zone around the lattice
+// Uniaxial crushing of one grain (Zhu & Zhao 2019 §4.2, Fig. 9): the zone around the lattice
 // point nearest the top of the grain (+z) is pushed down with a force growing at the
 // size-dependent loading rate, the zone at the bottom is fixed, until the grain splits.
 struct CrushResult {

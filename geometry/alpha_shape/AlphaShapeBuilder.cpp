@@ -118,7 +118,7 @@ FragmentResult AlphaShapeBuilder::build(const Shape& parent, const Fracture& fra
       fracture);
 }
 
-// seeds/000 §3.2: boundary vertices = original surface points + fracture-surface points;
+// Zhu & Zhao 2019 §3.2: boundary vertices = original surface points + fracture-surface points;
 // alpha shape with Euler characteristic 2 and no self-intersection; convex hull when
 // d_e < 0.7 mm or convexity >= 0.85; uniform rescaling to the parent's volume.
 FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const PointClusters& pc,
@@ -129,7 +129,7 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
   for (std::size_t i = 0; i < pc.points.size(); ++i) {
     const int c = pc.cluster[i];
     material[c].push_back(pc.points[i]);
-    // Boundary vertices (seeds/000 §3.2): surface points + fracture points. They feed the
+    // Boundary vertices (Zhu & Zhao 2019 §3.2): surface points + fracture points. They feed the
     // convex hulls and the alpha shape with alpha_boundary_only; without surface flags
     // every point of the cluster counts as a boundary vertex (same hull, slower).
     if (pc.on_surface.empty() || pc.on_surface[i]) boundary[c].push_back(pc.points[i]);
@@ -302,7 +302,7 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
     if (rep) (*rep)[i].raw_volume = mp.volume;
   }
   if (!(sum > 0)) throw std::runtime_error("fragment builder 'alpha_shape': children have no volume");
-  // Uniform scaling of all children (seeds/000 §3.2: "shrunken slightly until the total
+  // Uniform scaling of all children (Zhu & Zhao 2019 §3.2: "shrunken slightly until the total
   // volume of child particles equals the volume of the parent"; alpha shapes through
   // lattice points grow instead).
   const double f = std::cbrt(target / sum);

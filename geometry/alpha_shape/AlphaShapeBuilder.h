@@ -1,4 +1,4 @@
-// FragmentBuilder "alpha_shape" (seeds/000 §3.2, METHODS.md §3): child grains as
+// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2, METHODS.md §3): child grains as
 // alpha-shape polyhedra of the clusters' boundary points (PointClusters), or as the cells
 // of the parent's mesh cut by planes (CuttingSurfaces); volumes rescaled so that the
 // children's total equals the parent's.
@@ -16,7 +16,7 @@
 namespace crumble {
 
 struct AlphaShapeBuilderOptions {
-  // Zhu & Zhao's simplification (seeds/000 §3.2): a child whose equivalent diameter is
+  // Zhu & Zhao's simplification (Zhu & Zhao 2019 §3.2): a child whose equivalent diameter is
   // below hull_diameter (m), or whose convexity V / V_hull is >= hull_convexity, is
   // replaced by its convex hull. hull_convexity > 1 disables the convexity rule,
   // hull_diameter = 0 the size rule.
@@ -25,7 +25,7 @@ struct AlphaShapeBuilderOptions {
   AlphaShapeOptions alpha;  // `spacing` is taken from each PointClusters
   // Points handed to the alpha shape. false (default): every material point of the
   // cluster plus its fracture points — the surface vertices are still exactly the
-  // boundary vertices of seeds/000 §3.2, and the inner layers give small Delaunay cells
+  // boundary vertices of Zhu & Zhao 2019 §3.2, and the inner layers give small Delaunay cells
   // under every flat patch of surface points. true: the boundary vertices only (the
   // paper's literal input); a single surface layer then has no small cell under a flat
   // lattice patch, and the shape stays open until alpha reaches about the piece's

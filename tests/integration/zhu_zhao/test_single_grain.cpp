@@ -1,4 +1,4 @@
-// seeds/000 end to end through the CLI: Bullet moves the grain, peridynamics breaks it,
+// Zhu & Zhao 2019 end to end through the CLI: Bullet moves the grain, peridynamics breaks it,
 // alpha shapes rebuild the pieces, the pieces go back into Bullet.
 #include <gtest/gtest.h>
 
@@ -36,7 +36,7 @@ TEST(ZhuZhao, SingleGrainCrushesAtThePapersForce) {
   // Coarser breakage checks than the shipped file (0.2 MPa = 7.2 N steps) keep this short.
   const Json s = run_scenario("single_grain_pd", "--set schedule.every_stress=0.2e6");
   ASSERT_TRUE(s.contains("crushing_force_N")) << s.dump(2);
-  // seeds/000 §4.2: a 2 mm grain with G_c = 30 J/m² crushes at ≈ 180 N (≈ 45 MPa); ±10 %
+  // Zhu & Zhao 2019 §4.2: a 2 mm grain with G_c = 30 J/m² crushes at ≈ 180 N (≈ 45 MPa); ±10 %
   // plus the check interval.
   EXPECT_NEAR(s["crushing_force_N"].get<double>(), 180.0, 18.0 + 7.2);
   EXPECT_NEAR(s["characteristic_strength_Pa"].get<double>(), s["crushing_force_N"].get<double>() / 4e-6, 1.0);

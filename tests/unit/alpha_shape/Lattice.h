@@ -1,7 +1,7 @@
 // Synthetic peridynamic outcomes for the alpha-shape tests: a cubic lattice of a parent
-// shape (spacing 0.062·d, seeds/000 §2.1), split into clusters by a rule, with surface
+// shape (spacing 0.062·d, Zhu & Zhao 2019 §2.1), split into clusters by a rule, with surface
 // flags (fewer than 6 lattice neighbours inside) and fracture points at the midpoints of
-// cut nearest-neighbour bonds (seeds/000 §3.2).
+// cut nearest-neighbour bonds (Zhu & Zhao 2019 §3.2).
 #pragma once
 #include <cmath>
 #include <functional>

@@ -1,4 +1,4 @@
-// FragmentBuilder "alpha_shape" (seeds/000 §3.2, METHODS.md §3) and its geometry
+// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2, METHODS.md §3) and its geometry
 // (geometry/AlphaShape.h, geometry/MeshClip.h).
 #include <gtest/gtest.h>
 
@@ -22,8 +22,8 @@ using namespace crumble;
 
 namespace {
 
-constexpr double kD = 2e-3;              // 2 mm grain (seeds/000 reference)
-constexpr double kSpacing = 0.062 * kD;  // seeds/000 §2.1
+constexpr double kD = 2e-3;              // 2 mm grain (Zhu & Zhao 2019 reference)
+constexpr double kSpacing = 0.062 * kD;  // Zhu & Zhao 2019 §2.1
 
 double hull_volume(const TriMesh& m) { return polyhedron_mass_properties(convex_hull(m.vertices)).volume; }
 

@@ -261,7 +261,7 @@ TEST(BulletEngine, SlidingFrictionStopsAtTheCoulombDistance) {
   }
 }
 
-// Mass scaling (seeds/000 §5: ×70) slows the dynamics but keeps the weights physical.
+// Mass scaling (Zhu & Zhao 2019 §5: ×70) slows the dynamics but keeps the weights physical.
 TEST(BulletEngine, MassScalingKeepsWeightsPhysical) {
   auto e = make_engine({{"mass_scale", 70}});
   const auto s = Shape::box({1e-3, 1e-3, 1e-3});

@@ -60,7 +60,7 @@ TEST(Weibull, KsDetectsAWrongModulus) {
 }
 
 TEST(Weibull, LinearFitMatchesClosedFormSeeds000) {
-  // seeds/000 eq. 12: sigma/sigma0 = (U - b)/a * (d/d0)^(-3/psi), uniform between
+  // Zhu & Zhao 2019 eq. 12: sigma/sigma0 = (U - b)/a * (d/d0)^(-3/psi), uniform between
   // (1 - b)/a and -b/a at d = d0 (a = -0.76, b = 1.13: 0.171 .. 1.487).
   WeibullParams p;
   p.variant = "linear";
@@ -78,7 +78,7 @@ TEST(Weibull, LinearFitMatchesClosedFormSeeds000) {
 }
 
 TEST(Weibull, SizeEffectOfChildren) {
-  // seeds/000 eq. 14 / seeds/004 eq. 13
+  // Zhu & Zhao 2019 eq. 14 / Harmon et al. 2020 eq. 13
   EXPECT_NEAR(weibull_size_effect(10.0, 1.0, 2.0, 3.0), 20.0, 1e-12);
   EXPECT_NEAR(weibull_size_effect(10.0, 2.0, 2.0, 3.1), 10.0, 1e-12);
 }

@@ -1,5 +1,5 @@
 // LevelSetGrid: sampling, interpolation, reinitialisation, surface nodes, mass properties
-// (seeds/004 eqs. 24–30), marching tetrahedra, and the superellipsoid closed forms of Shape.
+// (Harmon et al. 2020 eqs. 24–30), marching tetrahedra, and the superellipsoid closed forms of Shape.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -253,7 +253,7 @@ TEST(LevelSetGrid, Ellipse2DReinitialised) {
 
 TEST(LevelSetGrid, WithValuesAndReinitialise) {
   auto g = unit_sphere(0.05);
-  // A half sphere by CSG: max(φ, −(−z)) = max(φ, z) keeps z < 0 (seeds/004 eq. 14).
+  // A half sphere by CSG: max(φ, −(−z)) = max(φ, z) keeps z < 0 (Harmon et al. 2020 eq. 14).
   std::vector<double> phi = g->values();
   const auto n = g->counts();
   for (int k = 0; k < n[2]; ++k)

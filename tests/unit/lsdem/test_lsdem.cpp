@@ -188,7 +188,7 @@ TEST(Lsdem, SphereAtRestCarriesItsWeight) {
 }
 
 TEST(Lsdem, MassScalingKeepsTheWeightAndLengthensTheStep) {
-  // seeds/000 §5 density scaling: inertia ×70, weight unchanged, stable step ×√70.
+  // Zhu & Zhao 2019 §5 density scaling: inertia ×70, weight unchanged, stable step ×√70.
   LsdemSettings s;
   s.kn = 1e7;
   s.damping_ratio = 0.7;

@@ -1,4 +1,4 @@
-// Breakage model "peridynamics" (seeds/000 §2.1, §3, §4): physics against the paper and
+// Breakage model "peridynamics" (Zhu & Zhao 2019 §2.1, §3, §4): physics against the paper and
 // closed forms, conservation, strength sampling, bad inputs.
 #include <gtest/gtest.h>
 
@@ -25,7 +25,7 @@ using pd::Lattice;
 using pd::LpsMaterial;
 using pd::PdSystem;
 
-Material table1() {  // seeds/000 Table 1
+Material table1() {  // Zhu & Zhao 2019 Table 1
   Material m;
   m.density = 2650;
   m.young = 100e9;
@@ -58,7 +58,7 @@ TEST(PeridynamicsCrush, ReferenceGrainCrushesNear180N) {
   // meridian cracks: four wedges and the crushed column between the contacts
   EXPECT_GE(r.fragments, 4);
   EXPECT_LT(*std::max_element(r.fragment_volumes.begin(), r.fragment_volumes.end()), 0.4 * s->volume());
-  EXPECT_GT(r.points, 2000);  // ≈ 2000–2500 points (seeds/000 §3.1)
+  EXPECT_GT(r.points, 2000);  // ≈ 2000–2500 points (Zhu & Zhao 2019 §3.1)
   EXPECT_LT(r.points, 2600);
   EXPECT_NEAR(volume_sum(r), s->volume(), 1e-12 * s->volume());
 }
@@ -644,7 +644,7 @@ TEST(PeridynamicsModel, OtherShapesDiscretiseAndCrush) {
   }
 }
 
-// The grains of seeds/000 §5 are 42-vertex polyhedra; their lattice uses MeshDistance.
+// The grains of Zhu & Zhao 2019 §5 are 42-vertex polyhedra; their lattice uses MeshDistance.
 TEST(PeridynamicsModel, PolyhedralGrainCrushes) {
   TriMesh m = icosphere(1);
   m.scale(1e-3);
