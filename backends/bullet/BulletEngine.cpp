@@ -489,7 +489,10 @@ struct BulletEngine::Impl {
     b->setUserPointer(&gb->tag);
     b->setUserIndex2(kCrumbleTag);
     b->setActivationState(DISABLE_DEACTIVATION);
-    b->setFlags(b->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+    // The gyroscopic term is added in step() for every grain: Bullet's own (the default
+    // BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY) is applied only inside the contact solver,
+    // which skips an island without contacts, so a free tumbling grain did not precess.
+    b->setFlags((b->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY) | BT_DISABLE_WORLD_GRAVITY);
     // Mass scaling slows the dynamics; the weight stays m·g.
     b->setGravity(bt(ctx.gravity * (scale / opt.mass_scale)));
     const Quat q = g.orientation.normalized();
@@ -530,6 +533,12 @@ struct BulletEngine::Impl {
       btTransform t = p->getWorldTransform();
       t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(driver.position()) + platen_half_thickness));
       p->setWorldTransform(t);
+    }
+    // Torque-free precession, ω ← ω + Δω of Bullet's implicit body-frame gyroscopic step
+    // (the same update the solver applies to bodies in contact, from the same pre-step state).
+    for (auto& [id, gb] : grains) {
+      btRigidBody* b = gb->body.get();
+      b->setAngularVelocity(b->getAngularVelocity() + b->computeGyroscopicImpulseImplicit_Body(dt));
     }
     last_dt = dt;
     solver->max_iterations = 0;

@@ -151,10 +151,6 @@ TEST_P(FreeEnergy, FreeAsymmetricBodyKeepsItsAngularMomentum) {
   std::cout << "extremes | free asymmetric body, 1e4 steps | " << GetParam().name << " " << GetParam().dimension
             << "D | angular momentum drift " << r.momentum_drift * 100 << " %, ω turned by " << r.omega_turn
             << " rad/s\n";
-  if (GetParam().dimension == 3 && GetParam().name == "bullet" && r.momentum_drift > 0.01)
-    GTEST_SKIP() << "known bug: Bullet keeps a free body's world angular velocity fixed (it turns by "
-                 << r.omega_turn << " rad/s over 1e4 steps), so a tumbling asymmetric grain does not precess: "
-                 << "angular momentum drift " << r.momentum_drift * 100 << " % (its kinetic energy stays exact)";
   if (GetParam().dimension == 3) EXPECT_GT(r.omega_turn, 1.0) << "the asymmetric box did not precess";
   EXPECT_LE(r.momentum_drift, 0.01);
 }
