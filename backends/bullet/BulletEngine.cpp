@@ -515,6 +515,30 @@ struct BulletEngine::Impl {
   }
 
   // ---------------------------------------------------------------- stepping
+  // The change of ω over dt from the gyroscopic term of Euler's equations, I ω̇ = −ω × I ω,
+  // by one implicit Newton step in the body frame: the update of Bullet's
+  // computeGyroscopicImpulseImplicit_Body with the inertia normalised by its largest moment.
+  // Bullet's own returns 0 for small grains: btMatrix3x3::solve33 leaves the determinant
+  // uninverted below 2.2e-16, and a mm grain's Jacobian has a determinant near I³ ≈ 1e-19.
+  // Bullet would also apply it only inside the contact solver, which skips an island without
+  // contacts, so a free tumbling grain did not precess (issue 10 extremes suite).
+  static btVector3 gyroscopic_step(const btRigidBody& b, double dt) {
+    const btVector3 il = b.getLocalInertia();
+    const double imax = std::max({il.x(), il.y(), il.z()});
+    if (!(imax > 0)) return btVector3(0, 0, 0);
+    const btVector3 w1 = b.getAngularVelocity();
+    const btQuaternion q = b.getWorldTransform().getRotation();
+    const btVector3 wb = quatRotate(q.inverse(), w1);
+    const btMatrix3x3 ib(il.x() / imax, 0, 0, 0, il.y() / imax, 0, 0, 0, il.z() / imax);
+    const btVector3 f = dt * wb.cross(ib * wb);  // residual of I (ω' − ω) + dt ω' × I ω' at ω' = ω
+    btMatrix3x3 s0, s1;
+    wb.getSkewSymmetricMatrix(&s0[0], &s0[1], &s0[2]);
+    (ib * wb).getSkewSymmetricMatrix(&s1[0], &s1[1], &s1[2]);
+    const btMatrix3x3 jac = ib + (s0 * ib - s1) * dt;  // its determinant is ≈ the product of I/imax
+    const btVector3 wb2 = wb - jac.solve33(f);
+    return quatRotate(q, wb2) - w1;
+  }
+
   void step(double dt) {
     if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("bullet: step needs a finite dt > 0");
     if (scale <= 0) fix_scale(0);
@@ -534,11 +558,10 @@ struct BulletEngine::Impl {
       t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(driver.position()) + platen_half_thickness));
       p->setWorldTransform(t);
     }
-    // Torque-free precession, ω ← ω + Δω of Bullet's implicit body-frame gyroscopic step
-    // (the same update the solver applies to bodies in contact, from the same pre-step state).
+    // Torque-free precession (Euler's equations), for every grain before the step.
     for (auto& [id, gb] : grains) {
       btRigidBody* b = gb->body.get();
-      b->setAngularVelocity(b->getAngularVelocity() + b->computeGyroscopicImpulseImplicit_Body(dt));
+      b->setAngularVelocity(b->getAngularVelocity() + gyroscopic_step(*b, dt));
     }
     last_dt = dt;
     solver->max_iterations = 0;
