@@ -8,7 +8,10 @@
 //     platen force = floor force − weight (2 %);
 //   - free fall: velocity, height and kinetic energy against g·t, g·t²/2 and the work of the
 //     weight, within one time step's worth of the integrator's offset;
-//   - the same scene run twice with one thread gives bitwise the same state.
+//   - the same scene run twice with one thread gives bitwise the same state;
+//   - a grain replaced mid-run by its two halves: no NaN, the floor carries the weight (1 %);
+//   - Coulomb friction: a sliding cube stops after v0²/(2μg) on the floor and on a grain;
+//   - mass scaling (engines with a `mass_scale` option) keeps the weights physical.
 // The engines come from the registration table (tests/support/Registered.h): a new engine,
 // or a plugin's (CRUMBLE_TEST_PLUGINS), is tested by registering it. Engine-specific checks
 // (Bullet margins, ODE contact clipping, lsdem contact laws) stay in tests/unit/<engine>.
@@ -64,10 +67,11 @@ class EngineConformance : public ::testing::TestWithParam<Registered> {
   Vec3 at(double x, double h) const { return dim() == 3 ? Vec3{x, 5e-3, h} : Vec3{x, h, 0}; }
   Quat turn(double angle) const { return Quat::from_axis_angle({0, 0, 1}, angle); }
 
-  std::unique_ptr<Engine> make(Material mat = Material{}, bool statics = false) const {
+  std::unique_ptr<Engine> make(Material mat = Material{}, bool statics = false, const json& extra = json::object()) const {
     const Profile p = profile(GetParam().name, dim());
     json opts = p.options;
     if (statics) opts.update(p.statics);
+    opts.update(extra);
     opts["type"] = GetParam().name;
     Config cfg(opts);
     EngineContext ctx;
@@ -335,6 +339,104 @@ TEST_P(EngineConformance, SameResultTwiceWithOneThread) {
   }
   EXPECT_EQ(std::memcmp(&a.platen, &b.platen, sizeof(double)), 0);
   EXPECT_EQ(std::memcmp(&a.floor, &b.floor, sizeof(double)), 0);
+}
+
+// A grain replaced mid-run by its two halves (what every breakage event does): no NaN, the
+// halves settle where the parent was, and the floor carries the same weight (1 %).
+TEST_P(EngineConformance, ReplacingAGrainByTwoHalvesMidRun) {
+  auto e = make(Material{}, true);
+  e->set_container(box(10e-3));
+  // 4 × 2 (× 2) mm, cut into two 2 mm cubes (squares); a ball rests on it.
+  const auto whole = dim() == 3 ? Shape::box({2e-3, 1e-3, 1e-3})
+                                : Shape::polygon({{-2e-3, -1e-3, 0}, {2e-3, -1e-3, 0}, {2e-3, 1e-3, 0}, {-2e-3, 1e-3, 0}});
+  const auto half = cube();
+  const auto top = dim() == 3 ? Shape::sphere(0.9e-3) : Shape::disk(0.9e-3);
+  Grain parent = grain(7, whole, at(5e-3, 1.01e-3), turn(dim() == 3 ? 0.3 : 0));
+  e->add_grain(parent);
+  e->add_grain(grain(8, top, at(5e-3, 3.2e-3)));
+  run(*e, 0.05);
+  parent = state_of(*e, parent);
+  // Children in the parent frame at x = ±1 mm, velocities v + ω × r.
+  std::vector<Grain> kids;
+  for (int k = 0; k < 2; ++k) {
+    const Vec3 r = parent.orientation.rotate({k == 0 ? -1e-3 : 1e-3, 0, 0});
+    Grain c = grain(20 + k, half, parent.position + r, parent.orientation);
+    c.parent = parent.id;
+    c.velocity = parent.velocity + cross(parent.angular_velocity, r);
+    c.angular_velocity = parent.angular_velocity;
+    kids.push_back(c);
+  }
+  e->replace_grain(parent.id, kids);
+  EXPECT_EQ(e->grain_count(), 3u);
+  EXPECT_THROW(e->remove_grain(parent.id), std::invalid_argument);
+  const double dt = step_of(*e);
+  for (long k = 0, n = std::lround(0.075 / dt); k < n; ++k) {
+    e->step(dt);
+    ASSERT_TRUE(std::isfinite(e->floor_force())) << "step " << k;
+  }
+  const double W = (mass(whole) + mass(top)) * kG;
+  EXPECT_NEAR(average(*e, 0.01).floor, W, 0.01 * W);
+  for (auto& c : kids) {
+    c = state_of(*e, c);
+    EXPECT_TRUE(is_finite(c.position) && is_finite(c.velocity));
+    EXPECT_NEAR(up(c.position), 1e-3, 0.05e-3);
+  }
+  for (const auto& c : e->contacts()) EXPECT_TRUE(is_finite(c.force));
+}
+
+// Coulomb friction: a cube (square) launched at v0 along what it rests on stops after
+// v0²/(2μg) (less half a step's travel for semi-implicit Euler), μ the wall friction on the floor (2 %) and the grain
+// friction on another grain (3 %).
+TEST_P(EngineConformance, SlidingFrictionStopsAtTheCoulombDistance) {
+  Material mat;
+  mat.friction = 0.5;
+  mat.wall_friction = 0.3;
+  mat.rolling_friction = 0;
+  const double v0 = 0.05;
+  Container c = box(10e-3);
+  c.lx = 20e-3;
+  if (dim() == 3) c.ly = 20e-3;
+  const auto slide = [&](bool on_grain) {
+    auto e = make(mat);
+    e->set_container(c);
+    double h = 1e-3;
+    if (on_grain) {
+      const auto slab = dim() == 3 ? Shape::box({4e-3, 4e-3, 1e-3})
+                                   : Shape::polygon({{-4e-3, -1e-3, 0}, {4e-3, -1e-3, 0}, {4e-3, 1e-3, 0}, {-4e-3, 1e-3, 0}});
+      Grain base = grain(0, slab, at(10e-3, 1e-3));
+      if (dim() == 3) base.position.y = 10e-3;
+      e->add_grain(base);
+      h = 3e-3;
+    }
+    Grain s = grain(1, cube(), at(on_grain ? 8e-3 : 5e-3, h));  // touching what it slides on
+    if (dim() == 3) s.position.y = 10e-3;
+    s.velocity = {v0, 0, 0};
+    e->add_grain(s);
+    const double x0 = s.position.x;
+    run(*e, 0.025);  // it stops after v0/(μg) ≤ 17 ms
+    const Grain r = state_of(*e, s);
+    const double mu = on_grain ? mat.friction : mat.wall_friction;
+    const double expect = v0 * v0 / (2 * mu * kG) - 0.5 * v0 * step_of(*e);
+    EXPECT_NEAR(r.position.x - x0, expect, (on_grain ? 0.03 : 0.02) * expect) << (on_grain ? "on a grain" : "on the floor");
+    EXPECT_NEAR(r.velocity.x, 0.0, 0.005 * v0);  // an explicit engine's tangential spring still rings
+  };
+  slide(false);
+  slide(true);
+}
+
+// Mass scaling (Zhu & Zhao 2019 §5: ×70) slows the dynamics but keeps the weights physical:
+// the floor carries m·g, not 70·m·g. Engines without a `mass_scale` option skip.
+TEST_P(EngineConformance, MassScalingKeepsWeightsPhysical) {
+  bool has = false;
+  for (const auto& o : engines().find(GetParam().name, "/engine/type").options) has = has || o.key == "mass_scale";
+  if (!has) GTEST_SKIP() << GetParam().name << " declares no mass_scale option";
+  auto e = make(Material{}, true, {{"mass_scale", 70}});
+  e->set_container(box(10e-3));
+  const auto s = cube();
+  e->add_grain(grain(0, s, at(5e-3, 1.02e-3)));
+  run(*e, 0.1);
+  const double mg = mass(s) * kG;
+  EXPECT_NEAR(average(*e, 0.01).floor, mg, 0.01 * mg);
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, EngineConformance, ::testing::ValuesIn(registered_engines()),
