@@ -5,7 +5,9 @@
 namespace crumble {
 
 // Breakage checks every `every_stress` Pa of platen stress (Zhu & Zhao 2019: 0.08 MPa)
-// and/or every `every_steps` steps; 0 disables a rule.
+// and/or every `every_steps` steps; 0 disables a rule. The stress is the commanded one
+// under a stress ramp, the measured one under a strain rate (a peak there advances the
+// schedule past it: pair every_stress with every_steps on an explicit engine).
 struct ScheduleSettings {
   double every_stress = 0;
   long every_steps = 0;

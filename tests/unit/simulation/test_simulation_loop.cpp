@@ -215,3 +215,54 @@ TEST(SimulationLoop, FragmentBuildingIsTimedApartFromAnalyses) {
   EXPECT_GE(slow_model.sum.timings.analyses, 8 * 0.03);
   EXPECT_LT(slow_model.sum.timings.fragments, 0.3 * slow_model.sum.timings.analyses);
 }
+
+namespace {
+// The squeeze engine with one absurd platen-force reading at step `spike_at` (the start-up
+// transient of an explicit engine loading a packing settled by another).
+class SpikeEngine : public SqueezeEngine {
+ public:
+  void step(double dt) override {
+    SqueezeEngine::step(dt);
+    ++steps_;
+  }
+  double platen_force() const override { return steps_ == spike_at ? 1e9 : SqueezeEngine::platen_force(); }
+  long steps_ = 0, spike_at = 30;
+};
+}  // namespace
+
+// Under a stress ramp the schedule follows the commanded stress: a peak in the measured
+// platen stress does not postpone the later checks (it used to: one check at the peak,
+// then none until the stress came back to it).
+TEST(SimulationLoop, StressRampChecksFollowTheCommandNotAMeasuredPeak) {
+  const auto run = [](long spike_at) {
+    EngineContext ctx;
+    SimulationSettings ss;
+    ss.time_steps = {{1e300, 1e-4}};
+    ss.sample_every = 0;
+    ss.guards.containment = false;
+    ss.guards.enabled = false;  // the absurd reading would (rightly) trip a guard
+    LoadingSettings ls;
+    ls.mode = "stress_ramp";
+    ls.max_stress = 1e5;   // Pa
+    ls.ramp_time = 0.004;  // 40 steps; the squeeze reaches 40 N, below every grain's strength
+    ScheduleSettings sch;
+    sch.every_stress = 1e4;
+    ScreeningSettings scr;
+    scr.force_threshold = false;
+    auto engine = std::make_unique<SpikeEngine>();
+    engine->spike_at = spike_at;
+    Simulation sim(std::move(engine), std::make_unique<ThresholdModel>(), std::make_unique<EighthBuilder>(), ctx, ss,
+                   ls, sch, scr, 1);
+    sim.set_container({0.01, 0.01, 0.01, 0});
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    sim.add_grain(g);
+    return sim.run();
+  };
+  const RunSummary calm = run(-1), spiked = run(15);
+  EXPECT_EQ(calm.breakage_events, 0);
+  // About one check per 0.01 MPa of the 0.1 MPa ramp, each analysing the one grain, with or
+  // without the peak at step 15 (3 checks done by then).
+  EXPECT_GE(calm.analyses, 9);
+  EXPECT_EQ(spiked.analyses, calm.analyses);
+}
