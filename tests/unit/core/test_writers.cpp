@@ -134,7 +134,8 @@ TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
 
 TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
   // Two spheres of the 3D fixture: icosphere meshes (42 vertices) have sphericity < 1 and
-  // isotropic inertia, so EI = FI = 1.
+  // isotropic inertia; their extents along the principal axes (Zhu & Zhao 2019 §5) are the
+  // diameter within the facets' chord error, ≈ 2 % for 42 vertices, so EI, FI = 1 within 3 %.
   Fixture f("shape");
   {
     ShapeWriter w(f.dir.string(), 3);
@@ -146,7 +147,7 @@ TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
     w.on_sample(*f.sc.sim, s);  // same step: no second row
     RunSummary sum;
     w.on_finish(*f.sc.sim, s, sum);
-    EXPECT_NEAR(sum.extra["mean_zingg_ei_final"], 1.0, 1e-9);
+    EXPECT_NEAR(sum.extra["mean_zingg_ei_final"], 1.0, 0.03);
   }
   const auto rows = read_csv((f.dir / "shape.csv").string());
   ASSERT_EQ(rows.size(), 3u);
@@ -154,6 +155,6 @@ TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
   const double sph = std::stod(rows[2][5]);
   EXPECT_GT(sph, 0.95);
   EXPECT_LT(sph, 1.0);
-  EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 1e-9);
-  EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 1e-9);
+  EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 0.03);
+  EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 0.03);
 }
