@@ -188,6 +188,44 @@ double relative_breakage(const std::vector<double>& initial_sizes, const std::ve
   return bp > 0 ? bt / bp : nan;
 }
 
+double relative_breakage_sieved(const std::vector<double>& sieves, const std::vector<double>& p0_in,
+                                const std::vector<double>& p1_in, double cutoff) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t n = sieves.size();
+  if (n == 0 || p0_in.size() != n || p1_in.size() != n || !(cutoff > 0)) return nan;
+  std::vector<std::size_t> idx(n);
+  std::iota(idx.begin(), idx.end(), 0);
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return sieves[a] < sieves[b]; });
+  // Knots in log10 size with the fractions passing; the smallest sieve's value reaches down
+  // to the cut-off.
+  std::vector<double> x, f0, f1;
+  for (std::size_t i : idx) {
+    if (!(sieves[i] > 0)) continue;
+    if (x.empty() && sieves[i] > cutoff) {
+      x.push_back(std::log10(cutoff));
+      f0.push_back(p0_in[i] / 100);
+      f1.push_back(p1_in[i] / 100);
+    }
+    x.push_back(std::log10(sieves[i]));
+    f0.push_back(p0_in[i] / 100);
+    f1.push_back(p1_in[i] / 100);
+  }
+  const double xc = std::log10(cutoff);
+  double bp = 0, bt = 0;
+  for (std::size_t k = 0; k + 1 < x.size(); ++k) {
+    double a = x[k], b = x[k + 1];
+    if (b <= xc) continue;
+    // Clip the segment at the cut-off, interpolating the straight lines there.
+    auto lerp = [&](const std::vector<double>& f, double t) { return f[k] + (f[k + 1] - f[k]) * (t - x[k]) / (x[k + 1] - x[k]); };
+    const double a0 = a < xc ? lerp(f0, xc) : f0[k], a1 = a < xc ? lerp(f1, xc) : f1[k];
+    a = std::max(a, xc);
+    // Trapezoids are exact for straight lines.
+    bp += (b - a) * (1 - 0.5 * (a0 + f0[k + 1]));
+    bt += (b - a) * 0.5 * ((a1 - a0) + (f1[k + 1] - f0[k + 1]));
+  }
+  return bp > 0 ? bt / bp : nan;
+}
+
 NclFit fit_ncl(const std::vector<double>& stress, const std::vector<double>& e, double lo, double hi) {
   std::vector<double> x, y;
   for (std::size_t i = 0; i < std::min(stress.size(), e.size()); ++i)

@@ -80,6 +80,15 @@ double relative_breakage(const std::vector<double>& initial_sizes, const std::ve
                          const std::vector<double>& sizes, const std::vector<double>& masses,
                          double cutoff = kHardinCutoff);
 
+// The same B_r from two sieve curves (percent passing of the initial and the current sample
+// at the same sieves, in any order), as Hardin read it off plotted curves: straight lines in
+// log size between the sieves, 100 % passing above the largest sieve, the smallest sieve's
+// value continued down to the cut-off. What psd.csv holds, so a resumed run gives the same
+// figure. NaN when the initial curve passes 100 % above the cut-off or the inputs disagree
+// in length.
+double relative_breakage_sieved(const std::vector<double>& sieves, const std::vector<double>& initial_percent,
+                                const std::vector<double>& percent, double cutoff = kHardinCutoff);
+
 // ---- Compression ----
 
 // Normal compression line over the samples with stress_min <= σ_v <= stress_max (σ_v > 0):

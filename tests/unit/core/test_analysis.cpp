@@ -115,6 +115,20 @@ TEST(Analysis, RelativeBreakageOfHandComputedCurves) {
   EXPECT_TRUE(std::isnan(relative_breakage({0.05e-3}, {1}, {0.05e-3}, {1})));
 }
 
+TEST(Analysis, RelativeBreakageFromSieveCurves) {
+  // Sieves 0.01, 0.1, 1 mm (one decade apart), cut-off 0.01 mm; initial 0, 0, 100 %, current
+  // 0, 50, 100 %, straight in log size between sieves:
+  // B_p = 1 (first decade, nothing passes) + (1 − 0.5) (second, the initial line 0 → 1) = 1.5;
+  // B_t = 0.25 (current 0 → 0.5 over the first decade) + (0.75 − 0.5) = 0.5; B_r = 1/3.
+  const std::vector<double> sv = {1e-3, 0.1e-3, 0.01e-3};
+  EXPECT_NEAR(relative_breakage_sieved(sv, {100, 0, 0}, {100, 50, 0}, 0.01e-3), 1.0 / 3.0, 1e-12);
+  // A cut-off halfway (in log) through the second decade: there the initial line is at 0.5
+  // and the current at 0.75; B_p = 0.5·(1 − 0.75) = 0.125, B_t = 0.5·(0.25 + 0)/2 = 0.0625.
+  EXPECT_NEAR(relative_breakage_sieved(sv, {100, 0, 0}, {100, 50, 0}, std::sqrt(0.1) * 1e-3), 0.5, 1e-12);
+  EXPECT_NEAR(relative_breakage_sieved(sv, {100, 0, 0}, {100, 0, 0}), 0.0, 1e-15);
+  EXPECT_TRUE(std::isnan(relative_breakage_sieved(sv, {100, 0}, {100, 0, 0})));
+}
+
 // ---- Compression ----
 
 TEST(Analysis, NclSlopesOverAStressRange) {

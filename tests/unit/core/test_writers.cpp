@@ -158,3 +158,29 @@ TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
   EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 0.03);
   EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 0.03);
 }
+
+TEST(SeriesWriter, K0IsTheLastColumnAndEmptyWithoutVerticalStress) {
+  // Two spheres on the floor, clear of the side walls: the walls carry nothing, so K0 = 0 once
+  // the platen carries a stress, and an empty cell (never NaN) while it carries none.
+  Fixture f("series_k0");
+  RunSummary sum;
+  {
+    SeriesWriter w(f.dir.string());
+    RunState s;
+    s.step = 1;
+    s.platen_height = 0.006;
+    w.on_sample(*f.sc.sim, s);
+    s.step = 2;
+    s.platen_stress = 1e6;
+    w.on_sample(*f.sc.sim, s);
+    w.on_finish(*f.sc.sim, s, sum);
+  }
+  const auto rows = read_csv((f.dir / "series.csv").string());
+  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(rows[0].size(), 14u);
+  EXPECT_EQ(rows[0][12], "floor_force_N");  // the earlier columns keep their order
+  EXPECT_EQ(rows[0][13], "k0");
+  EXPECT_EQ(rows[1][13], "");
+  EXPECT_EQ(rows[2][13], "0");
+  EXPECT_EQ(sum.extra["k0_final"], 0.0);
+}
