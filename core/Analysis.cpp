@@ -122,15 +122,15 @@ Gradation gradation(const std::vector<double>& sizes, const std::vector<double>&
   return g;
 }
 
-double fractal_dimension_by_mass(const std::vector<double>& sieves, const std::vector<double>& passing) {
+double fractal_dimension_by_mass(const std::vector<double>& sieves, const std::vector<double>& passing, int dimension) {
   std::vector<double> x, y;
   for (std::size_t i = 0; i < std::min(sieves.size(), passing.size()); ++i)
     if (sieves[i] > 0 && passing[i] > 0 && passing[i] < 100) {
       x.push_back(sieves[i]);
       y.push_back(passing[i]);
     }
-  // Tyler & Wheatcraft 1992: M(d < d0)/M_T = (d0/d_max)^(3 − D).
-  return 3.0 - loglog_slope(x, y);
+  // Tyler & Wheatcraft 1992: M(d < d0)/M_T = (d0/d_max)^(E − D).
+  return dimension - loglog_slope(x, y);
 }
 
 namespace {
@@ -269,7 +269,7 @@ double lateral_stress(const SideWallForces& f, double lx, double ly, double heig
 
 double lateral_stress_ratio(double horizontal, double vertical) {
   if (!(vertical > 0) || !std::isfinite(horizontal)) return std::numeric_limits<double>::quiet_NaN();
-  return horizontal / vertical;
+  return horizontal / vertical + 0.0;  // + 0.0: no "-0" in a file when no wall is touched
 }
 
 LoadDisplacement load_displacement(const std::vector<double>& h, const std::vector<double>& f) {

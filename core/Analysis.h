@@ -59,11 +59,13 @@ Gradation gradation(const std::vector<double>& sizes, const std::vector<double>&
 // than max(10, n/1000) grains are left out. NaN when all grains have one size.
 double fractal_dimension(const std::vector<double>& diameters, int sieves = 12);
 
-// The same D read from a PSD by mass (Tyler & Wheatcraft 1992: M(d < d0)/M_T = (d0/d_max)^(3−D)
-// for a fractal distribution of self-similar grains): 3 minus the log–log slope of the
-// fraction passing against the sieve size, over the sieves with 0 < passing < 100 %. For the
-// tables of psd.csv, where only masses are known. NaN with fewer than two such sieves.
-double fractal_dimension_by_mass(const std::vector<double>& sieves, const std::vector<double>& percent_passing);
+// The same D read from a PSD by mass (Tyler & Wheatcraft 1992: M(d < d0)/M_T = (d0/d_max)^(E−D)
+// for a fractal distribution of self-similar grains in E dimensions; 2D "mass" is area):
+// E minus the log–log slope of the fraction passing against the sieve size, over the sieves
+// with 0 < passing < 100 %. For the tables of psd.csv, where only masses are known. NaN with
+// fewer than two such sieves.
+double fractal_dimension_by_mass(const std::vector<double>& sieves, const std::vector<double>& percent_passing,
+                                 int dimension = 3);
 
 // ---- Relative breakage ----
 

@@ -114,7 +114,7 @@ class CompressionRecorder : public Observer {
     const NclFit ncl = fit_ncl_upper(stress_, e_);
     if (std::isfinite(ncl.loglog_slope)) sum.extra["ncl_loglog_slope"] = ncl.loglog_slope;
     if (std::isfinite(ncl.compression_index)) sum.extra["ncl_compression_index"] = ncl.compression_index;
-    psd_summary(sum);
+    psd_summary(sum, sim.context().dimension);
     std::vector<double> d;
     for (const auto& g : sim.grains()) d.push_back(g.shape->equivalent_diameter());
     // Only meaningful once grains have broken into a spread of sizes.
@@ -126,7 +126,7 @@ class CompressionRecorder : public Observer {
   // psd_summary.csv: per table of the finished psd.csv, the fractal dimension read from the
   // PSD by mass and Hardin's relative breakage against the initial table (core/Analysis.h);
   // summary.json relative_breakage_final. From the file, so a resumed run covers its history.
-  void psd_summary(RunSummary& sum) const {
+  void psd_summary(RunSummary& sum, int dimension) const {
     struct Table {
       std::string label, stress, strain;
       std::vector<double> sieves, passing;
@@ -147,7 +147,7 @@ class CompressionRecorder : public Observer {
        << "label,platen_stress_Pa,axial_strain,fractal_dimension_by_mass,relative_breakage,breakage_cutoff_m\n";
     auto cell = [](double v) { return std::isfinite(v) ? fmt_num(v) : std::string(); };  // never NaN in a file
     for (const auto& t : tables) {
-      const double D = fractal_dimension_by_mass(t.sieves, t.passing);
+      const double D = fractal_dimension_by_mass(t.sieves, t.passing, dimension);
       const double br = initial && initial->sieves == t.sieves
                             ? relative_breakage_sieved(t.sieves, initial->passing, t.passing)
                             : std::nan("");

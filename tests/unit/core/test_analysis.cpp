@@ -89,6 +89,8 @@ TEST(Analysis, FractalDimensionFromAPowerLawPsdByMass) {
     sv.push_back(2e-3);  // 100 % passing: left out of the fit
     p.push_back(100);
     EXPECT_NEAR(fractal_dimension_by_mass(sv, p), D, 1e-12);
+    // The same curve of areas in 2D: E = 2, so D is one less.
+    EXPECT_NEAR(fractal_dimension_by_mass(sv, p, 2), D - 1, 1e-12);
   }
   EXPECT_TRUE(std::isnan(fractal_dimension_by_mass({1e-3, 2e-3}, {0, 100})));
 }
