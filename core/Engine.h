@@ -76,6 +76,13 @@ class Engine {
   virtual double platen_force() const = 0;
   // The same for the floor (positive when the grains push it down).
   virtual double floor_force() const = 0;
+  // Normal force (N; 2D: N/m) the grains exert on the container wall `wall` (a WallId:
+  // kFloor, kPlaten, kWallXMin … kWallYMax), positive when they push it outwards, i.e.
+  // along minus the wall's inward normal (core/Platen.h wall_inward_normal). 0 for a wall
+  // the scene does not have. wall_force(kFloor) == floor_force() and wall_force(kPlaten) ==
+  // platen_force(). The side walls give the lateral stress of a confined sample (K0).
+  // The default sums contacts(): the normal component of every contact with that wall.
+  virtual double wall_force(int wall) const;
 
   // Moving walls (core/MovingWall.h), indexed in the order added. The Simulation sets
   // each wall's pose at the start of every step and its mean velocities over the step.

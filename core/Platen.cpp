@@ -2,8 +2,36 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace crumble {
+
+double Engine::wall_force(int wall) const {
+  // The contact normal points from the wall into the grain and the force is the one on the
+  // grain, so the push on the wall along its outward normal is dot(force, normal).
+  double f = 0;
+  for (const auto& c : contacts())
+    if (c.wall == wall) f += dot(c.force, c.normal);
+  return f;
+}
+
+Vec3 wall_inward_normal(int wall, int dimension) {
+  Vec3 n;
+  const int up = dimension == 3 ? 2 : 1;
+  switch (wall) {
+    case kFloor: n[up] = 1; break;
+    case kPlaten: n[up] = -1; break;
+    case kWallXMin: n.x = 1; break;
+    case kWallXMax: n.x = -1; break;
+    case kWallYMin:
+    case kWallYMax:
+      if (dimension != 3) throw std::invalid_argument("a 2D container has no y walls (wall " + std::to_string(wall) + ")");
+      n.y = wall == kWallYMin ? 1 : -1;
+      break;
+    default: throw std::invalid_argument("no container wall with id " + std::to_string(wall));
+  }
+  return n;
+}
 
 std::vector<WallPlane> container_planes(const Container& c, int dimension, double platen_position,
                                         double platen_velocity) {

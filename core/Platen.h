@@ -21,6 +21,11 @@ struct WallPlane {
   double offset() const { return dot(normal, point); }
 };
 
+// Unit normal of the container wall `wall` (WallId) pointing into the box: floor up,
+// platen down, x walls ±x, y walls ±y (3D only). Vertical axis: z in 3D, y in 2D. Throws
+// std::invalid_argument for another id (a 2D y wall, a shape wall).
+Vec3 wall_inward_normal(int wall, int dimension);
+
 // The container's walls in WallId order: floor (at 0 along the vertical axis), platen
 // (when c.height > 0, at `platen_position` moving at `platen_velocity` along the vertical
 // axis), x walls (when c.lx > 0), y walls (3D, when c.ly > 0). Vertical axis: z in 3D, y

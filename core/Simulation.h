@@ -105,6 +105,7 @@ class Simulation {
   const Loading& loading() const { return loading_; }
   double solid_volume() const;  // in the engine + removed fines
   double removed_volume() const { return removed_volume_; }
+  double removed_mass() const { return removed_mass_; }  // kg, the fines taken out of the engine
   RunState state() const;
   // Pull poses from the engine into grains() (observers that draw or measure call this).
   void sync_grains();

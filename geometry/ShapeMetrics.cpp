@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "geometry/LevelSetGrid.h"
+#include "geometry/Shape.h"
 #include "geometry/SymmetricEigen.h"
 
 namespace crumble {
@@ -116,16 +118,80 @@ std::array<double, 3> equivalent_ellipsoid_axes(const Mat3& inertia, double volu
   return ax;
 }
 
+const char* zingg_class(double ei, double fi) {
+  constexpr double k = 2.0 / 3.0;
+  if (ei >= k) return fi >= k ? "spheroid" : "disc";
+  return fi >= k ? "rod" : "blade";
+}
+
+std::array<double, 3> principal_extents(const TriMesh& mesh, const Mat3& inertia) {
+  if (mesh.vertices.empty()) throw std::invalid_argument("principal extents need a mesh with vertices");
+  // Zhu & Zhao 2019 §5: turn the grain into its principal axes of inertia and measure its
+  // extent along each (the columns of `axes` are the unit principal directions).
+  const Mat3 a = principal_axes(inertia).axes;
+  std::array<double, 3> ext{};
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 u{a(0, k), a(1, k), a(2, k)};
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& v : mesh.vertices) {
+      const double t = dot(v, u);
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+    }
+    ext[k] = hi - lo;
+  }
+  std::sort(ext.begin(), ext.end(), std::greater<double>());
+  return ext;
+}
+
 ShapeMetrics3D shape_metrics_3d(const TriMesh& mesh, const MassProperties& mp) {
   ShapeMetrics3D m;
   m.volume = mp.volume;
   m.surface_area = surface_area(mesh);
   m.sphericity = sphericity(mp.volume, m.surface_area);
-  m.principal_dimensions = equivalent_ellipsoid_axes(mp.inertia, mp.volume);
+  m.principal_dimensions = principal_extents(mesh, mp.inertia);
   const auto& d = m.principal_dimensions;
   m.elongation = d[0] > 0 ? d[1] / d[0] : 0;
   m.flatness = d[1] > 0 ? d[2] / d[1] : 0;
   return m;
+}
+
+namespace {
+// Distance from the centroid (inside) to the surface along the unit direction u: the first
+// sign change of the signed distance, marched at `step` and refined by bisection.
+double exit_distance(const Shape& s, const Vec3& u, double step, double reach) {
+  double a = 0, b = step;
+  while (b < reach && s.signed_distance(u * b) < 0) {
+    a = b;
+    b += step;
+  }
+  b = std::min(b, reach);
+  for (int i = 0; i < 60; ++i) {
+    const double m = 0.5 * (a + b);
+    (s.signed_distance(u * m) < 0 ? a : b) = m;
+  }
+  return 0.5 * (a + b);
+}
+}  // namespace
+
+double sieve_size(const Shape& s) {
+  if (!(s.signed_distance({}) < 0)) return s.equivalent_diameter();
+  // The chord through the signed distance (analytic for the analytic sources, so a disk
+  // gives its diameter to round-off), from the surface node closest to the centroid.
+  const auto& nodes = s.level_set().nodes();
+  Vec3 pmin;
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& p : nodes)
+    if (norm(p) < best) {
+      best = norm(p);
+      pmin = p;
+    }
+  if (!(best > 0) || !std::isfinite(best)) return s.equivalent_diameter();
+  const Vec3 u = pmin * (1.0 / best);
+  const double reach = 2.0 * s.bounding_radius() + 1e-12;
+  // March finely enough not to step over a thin part: a fraction of the distance to p_min.
+  const double step = std::max(0.25 * best, 1e-3 * reach);
+  return exit_distance(s, u, step, reach) + exit_distance(s, u * -1.0, step, reach);
 }
 
 }  // namespace crumble

@@ -198,7 +198,9 @@ const std::vector<std::pair<std::string, std::string>> kOptional = {
     {"characteristic_strength_Pa", "F/d² MPa"},
     {"crushing_stress_Pa", "crushing stress MPa"},
     {"product_d50_m", "product d50 mm"},
-    {"ncl_loglog_slope", "NCL slope"}};
+    {"ncl_loglog_slope", "NCL slope"},
+    {"relative_breakage_final", "B_r"},
+    {"k0_final", "K0"}};
 
 const std::vector<std::string>& kTimeParts = time_breakdown_parts();
 

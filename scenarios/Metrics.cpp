@@ -43,6 +43,10 @@ constexpr char kNcl[] = "ncl_loglog_slope";
 constexpr char kCircularity[] = "mean_circularity_final";
 constexpr char kSphericity[] = "mean_sphericity_final";
 constexpr char kProductD50[] = "product_d50_m";
+constexpr char kCompressionIndex[] = "ncl_compression_index";
+constexpr char kRelativeBreakage[] = "relative_breakage_final";
+constexpr char kK0[] = "k0_final";
+constexpr char kUniformity[] = "psd_uniformity_final";
 
 std::size_t column(const std::vector<std::string>& header, const std::string& name) {
   for (std::size_t i = 0; i < header.size(); ++i)
@@ -152,6 +156,13 @@ const std::vector<Metric>& metrics() {
        &from_summary<kCircularity>},
       {"mean_sphericity_final", "1", "3D: mean sphericity of the final grains", &from_summary<kSphericity>},
       {"product_d50", "m", "jaw crusher: mass median sieve size of the product", &from_summary<kProductD50>},
+      {"compression_index", "1", "C_c = -de/dlog10(stress) over the upper loading (e - log stress line)",
+       &from_summary<kCompressionIndex>},
+      {"relative_breakage", "1", "Hardin (1985) relative breakage B_r of the final PSD against the initial one",
+       &from_summary<kRelativeBreakage>},
+      {"k0", "1", "lateral stress ratio sigma_h/sigma_v from the side-wall forces at the end",
+       &from_summary<kK0>},
+      {"psd_uniformity", "1", "uniformity coefficient d60/d10 of the final PSD by mass", &from_summary<kUniformity>},
   };
   return table;
 }

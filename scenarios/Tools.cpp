@@ -41,6 +41,7 @@ namespace {
 // the characteristic strength F/d² and the fragments.
 class CrushingRecorder : public Observer {
  public:
+  explicit CrushingRecorder(std::string dir) : dir_(std::move(dir)) {}
   void on_start(const Simulation& sim, const RunState&) override {
     if (!sim.grains().empty()) d_ = sim.grains().front().shape->equivalent_diameter();
   }
@@ -60,6 +61,20 @@ class CrushingRecorder : public Observer {
   void on_finish(const Simulation&, const RunState&, RunSummary& sum) override {
     sum.extra["diameter_m"] = d_;
     sum.extra["max_platen_force_N"] = max_force_;
+    // load_displacement.csv from the finished series.csv (platen height and force).
+    std::vector<double> h, f;
+    const auto rows = read_csv(dir_ + "/series.csv");
+    for (std::size_t i = 1; i < rows.size(); ++i)
+      if (rows[i].size() >= 12) {
+        h.push_back(std::atof(rows[i][10].c_str()));
+        f.push_back(std::atof(rows[i][11].c_str()));
+      }
+    const LoadDisplacement ld = load_displacement(h, f);
+    std::ostringstream os;
+    os << std::setprecision(10) << "platen_displacement_m,platen_force_N\n";
+    for (std::size_t i = 0; i < ld.load.size(); ++i) os << ld.displacement[i] << ',' << ld.load[i] << '\n';
+    write_file_atomic(dir_ + "/load_displacement.csv", os.str());
+    if (!ld.load.empty()) sum.extra["displacement_at_max_force_m"] = ld.displacement_at_peak;
     if (!done_) return;
     sum.extra["crushing_force_N"] = force_;
     if (stress_ >= 0) sum.extra["crushing_stress_Pa"] = stress_;
@@ -69,6 +84,7 @@ class CrushingRecorder : public Observer {
   }
 
  private:
+  std::string dir_;
   double d_ = 0, force_ = 0, platen_ = 0, max_force_ = 0, stress_ = -1;
   bool done_ = false;
   std::vector<double> diam_;
@@ -88,23 +104,17 @@ class CompressionRecorder : public Observer {
       e_.push_back(std::atof(rows[i][6].c_str()));
       n_.push_back(static_cast<std::size_t>(std::atol(rows[i][7].c_str())));
     }
-    // Zhu & Zhao 2019 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
-    // over the upper part of the loading (σ ≥ 0.3 σ_max).
-    double smax = 0;
-    for (double s : stress_) smax = std::max(smax, s);
-    std::vector<double> x, y;
-    for (std::size_t i = 0; i < stress_.size(); ++i)
-      if (stress_[i] >= 0.3 * smax && stress_[i] > 0) {
-        x.push_back(stress_[i]);
-        y.push_back(e_[i]);
-      }
     std::ostringstream os;
     os << std::setprecision(10) << "platen_stress_Pa,log10_stress,void_ratio,grains\n";
     for (std::size_t i = 0; i < stress_.size(); ++i)
       if (stress_[i] > 0) os << stress_[i] << ',' << std::log10(stress_[i]) << ',' << e_[i] << ',' << n_[i] << '\n';
     write_file_atomic(dir_ + "/ncl.csv", os.str());
-    const double slope = loglog_slope(x, y);
-    if (std::isfinite(slope)) sum.extra["ncl_loglog_slope"] = slope;
+    // Zhu & Zhao 2019 §5: the NCL is about linear in log e – log σ (slope ≈ −0.52 there); fit
+    // over the upper part of the loading (σ ≥ 0.3 σ_max), also as e – log σ (C_c).
+    const NclFit ncl = fit_ncl_upper(stress_, e_);
+    if (std::isfinite(ncl.loglog_slope)) sum.extra["ncl_loglog_slope"] = ncl.loglog_slope;
+    if (std::isfinite(ncl.compression_index)) sum.extra["ncl_compression_index"] = ncl.compression_index;
+    psd_summary(sum, sim.context().dimension);
     std::vector<double> d;
     for (const auto& g : sim.grains()) d.push_back(g.shape->equivalent_diameter());
     // Only meaningful once grains have broken into a spread of sizes.
@@ -113,6 +123,41 @@ class CompressionRecorder : public Observer {
   }
 
  private:
+  // psd_summary.csv: per table of the finished psd.csv, the fractal dimension read from the
+  // PSD by mass and Hardin's relative breakage against the initial table (core/Analysis.h);
+  // summary.json relative_breakage_final. From the file, so a resumed run covers its history.
+  void psd_summary(RunSummary& sum, int dimension) const {
+    struct Table {
+      std::string label, stress, strain;
+      std::vector<double> sieves, passing;
+    };
+    std::vector<Table> tables;
+    const auto rows = read_csv(dir_ + "/psd.csv");
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      if (rows[i].size() < 5) continue;
+      if (tables.empty() || tables.back().label != rows[i][0]) tables.push_back({rows[i][0], rows[i][1], rows[i][4], {}, {}});
+      tables.back().sieves.push_back(std::atof(rows[i][2].c_str()));
+      tables.back().passing.push_back(std::atof(rows[i][3].c_str()));
+    }
+    const Table* initial = nullptr;
+    for (const auto& t : tables)
+      if (t.label == "initial") initial = &t;
+    std::ostringstream os;
+    os << std::setprecision(10)
+       << "label,platen_stress_Pa,axial_strain,fractal_dimension_by_mass,relative_breakage,breakage_cutoff_m\n";
+    auto cell = [](double v) { return std::isfinite(v) ? fmt_num(v) : std::string(); };  // never NaN in a file
+    for (const auto& t : tables) {
+      const double D = fractal_dimension_by_mass(t.sieves, t.passing, dimension);
+      const double br = initial && initial->sieves == t.sieves
+                            ? relative_breakage_sieved(t.sieves, initial->passing, t.passing)
+                            : std::nan("");
+      os << t.label << ',' << t.stress << ',' << t.strain << ',' << cell(D) << ',' << cell(br) << ','
+         << fmt_num(kHardinCutoff) << '\n';
+      if (t.label == "final" && std::isfinite(br)) sum.extra["relative_breakage_final"] = br;
+    }
+    write_file_atomic(dir_ + "/psd_summary.csv", os.str());
+  }
+
   std::string dir_;
   std::vector<double> stress_, e_;
   std::vector<std::size_t> n_;
@@ -159,8 +204,11 @@ class ReportRecorder : public Observer {
       sizes.push_back(0.0);
       masses.push_back(sum.mass_removed);
     }
-    const double d50 = mass_quantile(sizes, masses, 0.5);
-    if (std::isfinite(d50)) sum.extra["psd_d50_final_m"] = d50;
+    const Gradation g = gradation(sizes, masses);
+    if (std::isfinite(g.d50)) sum.extra["psd_d50_final_m"] = g.d50;
+    if (std::isfinite(g.d10)) sum.extra["psd_d10_final_m"] = g.d10;
+    if (std::isfinite(g.d60)) sum.extra["psd_d60_final_m"] = g.d60;
+    if (std::isfinite(g.uniformity)) sum.extra["psd_uniformity_final"] = g.uniformity;
     if (total > 0) sum.extra["fines_fraction_final"] = fines / total;
     sum.extra["fines_size_m"] = fines_size_;
   }
@@ -216,7 +264,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   }
   if (sc.output.checkpoint_every > 0)
     sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every));
-  if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>());
+  if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>(out));
   if (sim.container().open) sim.add_observer(std::make_shared<ProductWriter>(out, sc.packing.scene_figures));
 }
 

@@ -103,22 +103,46 @@ void check_finite(double v, const char* what) {
 SeriesWriter::SeriesWriter(const std::string& dir, long resume_step)
     : csv_(dir + "/series.csv",
            "time_s,step,dt_s,platen_stress_Pa,target_stress_Pa,axial_strain,void_ratio,grains,breakage_events,"
-           "analyses,platen_height_m,platen_force_N,floor_force_N",
+           "analyses,platen_height_m,platen_force_N,floor_force_N,k0",
            resume_step),
       last_step_(resume_step) {}
 
-void SeriesWriter::on_sample(const Simulation&, const RunState& s) {
+double current_k0(const Simulation& sim, const RunState& s) {
+  const Container& c = sim.container();
+  const int dim = sim.context().dimension;
+  if (c.open || !(c.lx > 0) || (dim == 3 && !(c.ly > 0))) return std::nan("");
+  const Engine& e = sim.engine();
+  SideWallForces f;
+  f.x_min = e.wall_force(kWallXMin);
+  f.x_max = e.wall_force(kWallXMax);
+  if (dim == 3) {
+    f.y_min = e.wall_force(kWallYMin);
+    f.y_max = e.wall_force(kWallYMax);
+  }
+  return lateral_stress_ratio(lateral_stress(f, c.lx, c.ly, s.platen_height, dim), s.platen_stress);
+}
+
+void SeriesWriter::on_sample(const Simulation& sim, const RunState& s) {
   if (s.step == last_step_) return;
   last_step_ = s.step;
   for (double v : {s.time, s.platen_stress, s.axial_strain, s.void_ratio, s.platen_force, s.floor_force})
     check_finite(v, "value in series.csv");
   csv_.row() << s.time << ',' << s.step << ',' << s.dt << ',' << s.platen_stress << ',' << s.target_stress << ','
              << s.axial_strain << ',' << s.void_ratio << ',' << s.grains << ',' << s.breakage_events << ','
-             << s.analyses << ',' << s.platen_height << ',' << s.platen_force << ',' << s.floor_force << '\n';
+             << s.analyses << ',' << s.platen_height << ',' << s.platen_force << ',' << s.floor_force << ',';
+  const double k0 = current_k0(sim, s);
+  if (std::isfinite(k0)) {  // never NaN in a file: an undefined K0 is an empty cell
+    csv_.row() << k0;
+    last_k0_ = k0;
+  }
+  csv_.row() << '\n';
   csv_.row().flush();  // a killed run keeps every row written so far
 }
 
-void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary&) { csv_.finish(); }
+void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum) {
+  csv_.finish();
+  if (std::isfinite(last_k0_)) sum.extra["k0_final"] = last_k0_;
+}
 
 namespace {
 std::string events_header(const std::vector<std::string>& figures) {
@@ -191,7 +215,6 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   flush_pending();
   csv_.finish();
   // From the finished events.csv, so a resumed run counts the events before the resume.
-  std::map<long, long> per;
   const auto rows = read_csv(dir_ + "/events.csv");
   // A breakage row has children or removed fines (every child can be a fine, leaving no
   // child in the engine); an analysis that did not break the grain has neither. Counting
@@ -204,16 +227,16 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
       if (rows[0][c] == "children") children_col = c;
       if (rows[0][c] == "removed_volume_m3") removed_col = c;
     }
+  std::vector<double> stresses;
   for (std::size_t i = 1; i < rows.size(); ++i)
     if (rows[i].size() > std::max(children_col, removed_col) &&
         (std::atol(rows[i][children_col].c_str()) > 0 || std::atof(rows[i][removed_col].c_str()) > 0))
-      ++per[static_cast<long>(std::floor(std::atof(rows[i][stress_col].c_str()) / 1e6))];
+      stresses.push_back(std::atof(rows[i][stress_col].c_str()));
+  // Zhu & Zhao 2019 Fig. 12: crushing events per 1 MPa of vertical stress.
+  const std::vector<long> per = events_per_increment(stresses, 1e6, s.platen_stress);
   std::ostringstream os;
   os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
-  const long top = static_cast<long>(std::floor(std::max(0.0, s.platen_stress) / 1e6));
-  long last = top;
-  if (!per.empty()) last = std::max(last, per.rbegin()->first);
-  for (long m = 0; m <= last; ++m) os << m << ',' << m + 1 << ',' << (per.count(m) ? per[m] : 0) << '\n';
+  for (std::size_t m = 0; m < per.size(); ++m) os << m << ',' << m + 1 << ',' << per[m] << '\n';
   write_file_atomic(dir_ + "/breakage_per_mpa.csv", os.str());
 }
 
@@ -269,20 +292,21 @@ void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&)
 }
 
 void PsdWriter::table(const Simulation& sim, const RunState& s, const std::string& label) {
-  // Sieves: geometric series from d_max down by factors of 2^(1/4), 24 sieves.
-  std::vector<double> sieves;
-  for (int k = 0; k <= 24; ++k) sieves.push_back(d_max_ * std::pow(2.0, -k / 4.0));
-  double total = sim.removed_volume();
-  for (const auto& g : sim.grains()) total += g.shape->volume();
+  // Sieves: geometric series from d_max down by factors of 2^(1/4), 25 sieves; by mass, the
+  // removed fines at size 0 (finer than every sieve listed here).
+  const std::vector<double> sieves = geometric_sieves(d_max_, 25, std::pow(2.0, 0.25));
+  std::vector<double> sizes, masses;
+  for (const auto& g : sim.grains()) {
+    sizes.push_back(g.shape->equivalent_diameter());
+    masses.push_back(g.shape->volume() * sim.context().materials[g.material].density);
+  }
+  sizes.push_back(0.0);
+  masses.push_back(sim.removed_mass());
+  const std::vector<double> pass = percent_passing(sizes, masses, sieves);
   std::ostringstream os;
   os << std::setprecision(10);
-  for (double sv : sieves) {
-    double pass = sim.removed_volume();  // fines are smaller than every sieve listed here
-    for (const auto& g : sim.grains())
-      if (g.shape->equivalent_diameter() <= sv) pass += g.shape->volume();
-    os << label << ',' << s.platen_stress << ',' << sv << ',' << (total > 0 ? 100.0 * pass / total : 0) << ','
-       << s.axial_strain << '\n';
-  }
+  for (std::size_t k = 0; k < sieves.size(); ++k)
+    os << label << ',' << s.platen_stress << ',' << sieves[k] << ',' << pass[k] << ',' << s.axial_strain << '\n';
   rows_ += os.str();
 }
 
@@ -555,13 +579,13 @@ void ProductWriter::on_finish(const Simulation& sim, const RunState&, RunSummary
     // Sieves: the series 1 mm · 2^(k/2) (a √2 series, as laboratory sieves) spanning the product.
     const int k0 = static_cast<int>(std::floor(2 * std::log2(smin / 1e-3))) - 1;
     const int k1 = static_cast<int>(std::ceil(2 * std::log2(smax / 1e-3))) + 1;
-    for (int k = k0; k <= k1; ++k) {
-      const double sv = 1e-3 * std::pow(2.0, k / 2.0);
-      double pass = fines;
-      for (const auto& p : product)
-        if (p.sieve < sv) pass += p.mass;
-      os << sv << ',' << 100.0 * pass / total << ',' << pass << '\n';
-    }
+    std::vector<double> sieves;
+    for (int k = k0; k <= k1; ++k) sieves.push_back(1e-3 * std::pow(2.0, k / 2.0));
+    std::vector<double> all_sizes = sizes, all_masses = masses;
+    all_sizes.push_back(0.0);  // fines removed inside the scene pass every sieve
+    all_masses.push_back(fines);
+    const std::vector<double> pass = percent_passing(all_sizes, all_masses, sieves);
+    for (std::size_t k = 0; k < sieves.size(); ++k) os << sieves[k] << ',' << pass[k] << ',' << pass[k] / 100 * total << '\n';
   }
   write_file_atomic(dir_ + "/product_psd.csv", os.str());
   std::ostringstream pr;

@@ -35,7 +35,10 @@ class CsvStream {
   bool done_ = false;
 };
 
-// series.csv: time, stress, strain, void ratio, grain count, breakage events (+ more).
+// series.csv: time, stress, strain, void ratio, grain count, breakage events (+ more), and
+// last `k0`: the lateral stress ratio σ_h/σ_v (core/Analysis.h) from the engine's side-wall
+// forces (Engine::wall_force) and the platen stress; empty where it is undefined (no
+// vertical stress yet, an open scene). summary.json: k0_final, the last defined value.
 class SeriesWriter : public Observer {
  public:
   // resume_step >= 0: continue the series of a run resumed at that step.
@@ -46,7 +49,13 @@ class SeriesWriter : public Observer {
  private:
   CsvStream csv_;
   long last_step_ = -1;
+  double last_k0_ = std::nan("");
 };
+
+// K0 = σ_h/σ_v of the current state (core/Analysis.h lateral_stress, lateral_stress_ratio):
+// the side walls' forces over their loaded areas (sample height = platen height) against
+// the platen stress. NaN for an open scene, a container without side walls or σ_v <= 0.
+double current_k0(const Simulation& sim, const RunState& s);
 
 // events.csv: one row per breakage analysis, the common columns first, then one column per
 // figure the model declares (BreakageModel::figure_names, in that order);

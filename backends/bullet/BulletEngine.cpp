@@ -592,10 +592,10 @@ struct BulletEngine::Impl {
     return j;
   }
 
-  // Vertical impulse on a wall body, summed over its manifolds.
-  double wall_impulse_z(int wall) const {
-    if (last_dt <= 0) return 0;
-    double jz = 0;
+  // Impulse on a wall body (internal units), summed over its manifolds.
+  btVector3 wall_impulse(int wall) const {
+    btVector3 j(0, 0, 0);
+    if (last_dt <= 0) return j;
     const int n = dispatcher->getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher->getInternalManifoldPointer()[i];
@@ -603,11 +603,12 @@ struct BulletEngine::Impl {
       const BodyTag* t1 = tag_of(m->getBody1());
       if (!t0 || !t1) continue;
       const btVector3 j0 = impulse_on_body0(m);
-      if (t0->wall == wall) jz += j0.z();
-      if (t1->wall == wall) jz -= j0.z();
+      if (t0->wall == wall) j += j0;
+      if (t1->wall == wall) j -= j0;
     }
-    return jz;
+    return j;
   }
+  double wall_impulse_z(int wall) const { return wall_impulse(wall).z(); }
 
   std::vector<Contact> contacts() const {
     std::vector<Contact> out;
@@ -757,6 +758,13 @@ double BulletEngine::platen_force() const {
 double BulletEngine::floor_force() const {
   if (impl_->last_dt <= 0) return 0;
   return -impl_->force_si(impl_->wall_impulse_z(kFloor));  // grains push the floor down
+}
+
+double BulletEngine::wall_force(int wall) const {
+  if (impl_->last_dt <= 0 || wall < kFloor || wall > kWallYMax) return 0;
+  const Vec3 n = wall_inward_normal(wall, 3);
+  const btVector3 j = impl_->wall_impulse(wall);
+  return -impl_->force_si(j.x() * n.x + j.y() * n.y + j.z() * n.z);  // outwards on the wall
 }
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }

@@ -719,6 +719,7 @@ void LsdemEngine::compute_forces(double dt) {
   contacts_.clear();
   platen_force_ = 0;
   floor_force_ = 0;
+  container_wall_force_.fill(0.0);
   for (auto& f : shape_wall_force_) f = {};
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
@@ -751,6 +752,8 @@ void LsdemEngine::compute_forces(double dt) {
       c.wall = wl.id;
       if (wl.id == kFloor) floor_force_ += dot(it.fa, wl.normal);
       if (wl.id == kPlaten) platen_force_ += dot(it.fa, wl.normal);
+      if (wl.id >= 0 && wl.id < static_cast<int>(container_wall_force_.size()))
+        container_wall_force_[wl.id] += dot(it.fa, wl.normal);  // inward normal: the push outwards
     }
     contacts_.push_back(c);
   }

@@ -43,6 +43,7 @@
 // writing its own slot; forces are then summed in the fixed order of the items (a function
 // of positions and ids), so results are bitwise independent of the thread count.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -126,6 +127,9 @@ class LsdemEngine final : public Engine {
   double platen_position() const override { return platen_.position(); }
   double platen_force() const override { return platen_force_; }
   double floor_force() const override { return floor_force_; }
+  double wall_force(int wall) const override {
+    return wall >= 0 && wall < static_cast<int>(container_wall_force_.size()) ? container_wall_force_[wall] : 0.0;
+  }
 
   // Rigid walls of any shape (crusher plates): a closed TriMesh through
   // Shape::polyhedron, a box, or in 2D a polygon; the shape's level set is used, and its
@@ -200,6 +204,7 @@ class LsdemEngine final : public Engine {
   std::vector<Contact> contacts_;
   PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly
   double platen_force_ = 0, floor_force_ = 0;
+  std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
   LsdemStats stats_;
 };

@@ -719,12 +719,14 @@ struct OdeEngine::Impl {
   // Force (SI) on grain a of record r, and the sum of the platen's / floor's vertical forces.
   Vec3 force_si(const PointRec& r) const { return vec(r.fb.f1) / scale; }
 
-  double wall_force_z(int wall) const {
-    double fz = 0;
+  // Force of the wall on the grains (SI), summed over the wall's contact points.
+  Vec3 wall_force_on_grains(int wall) const {
+    Vec3 f;
     for (const auto& r : recs)
-      if (r.live && r.wall == wall) fz += r.fb.f1[2];
-    return fz / scale;
+      if (r.live && r.wall == wall) f += Vec3{r.fb.f1[0], r.fb.f1[1], r.fb.f1[2]};
+    return f / scale;
   }
+  double wall_force_z(int wall) const { return wall_force_on_grains(wall).z; }
 
   std::vector<Contact> contacts() const {
     std::vector<Contact> out;
@@ -866,6 +868,11 @@ void OdeEngine::set_platen(const PlatenCommand& cmd) { impl_->set_platen(cmd); }
 double OdeEngine::platen_position() const { return impl_->current_platen_z(); }
 double OdeEngine::platen_force() const { return -impl_->wall_force_z(kPlaten); }  // up on the platen
 double OdeEngine::floor_force() const { return impl_->wall_force_z(kFloor); }     // grains push it down
+double OdeEngine::wall_force(int wall) const {
+  if (wall < kFloor || wall > kWallYMax) return 0;
+  // The wall pushes the grains along its inward normal; they push it back outwards.
+  return dot(impl_->wall_force_on_grains(wall), wall_inward_normal(wall, 3));
+}
 double OdeEngine::length_scale() const { return impl_->scale; }
 
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx) {

@@ -85,6 +85,7 @@ class OdeEngine final : public Engine {
   double platen_position() const override;
   double platen_force() const override;
   double floor_force() const override;
+  double wall_force(int wall) const override;
 
   double length_scale() const;  // internal units per metre (0 until fixed)
 

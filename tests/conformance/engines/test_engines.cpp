@@ -6,6 +6,8 @@
 //     grain 2mg and mg (1 %);
 //   - a force-controlled platen on the stack: platen force = command and
 //     platen force = floor force − weight (2 %);
+//   - gravity turned towards each side wall: wall_force() of that wall is m·g (1 %), every
+//     other wall's is zero, and it equals the sum of the wall's contacts;
 //   - free fall: velocity, height and kinetic energy against g·t, g·t²/2 and the work of the
 //     weight, within one time step's worth of the integrator's offset;
 //   - the same scene run twice with one thread gives bitwise the same state;
@@ -25,6 +27,7 @@
 #include <random>
 
 #include "core/Config.h"
+#include "core/Platen.h"
 #include "scenarios/Registry.h"
 #include "tests/support/Registered.h"
 
@@ -68,6 +71,10 @@ class EngineConformance : public ::testing::TestWithParam<Registered> {
   Quat turn(double angle) const { return Quat::from_axis_angle({0, 0, 1}, angle); }
 
   std::unique_ptr<Engine> make(Material mat = Material{}, bool statics = false, const json& extra = json::object()) const {
+    return make_with_gravity(gravity(), mat, statics, extra);
+  }
+  std::unique_ptr<Engine> make_with_gravity(Vec3 g, Material mat = Material{}, bool statics = false,
+                                            const json& extra = json::object()) const {
     const Profile p = profile(GetParam().name, dim());
     json opts = p.options;
     if (statics) opts.update(p.statics);
@@ -76,7 +83,7 @@ class EngineConformance : public ::testing::TestWithParam<Registered> {
     Config cfg(opts);
     EngineContext ctx;
     ctx.dimension = dim();
-    ctx.gravity = gravity();
+    ctx.gravity = g;
     ctx.materials = {mat};
     ctx.threads = 1;
     auto e = engines().find(GetParam().name, "/engine/type").make(cfg, ctx);
@@ -256,6 +263,49 @@ TEST_P(EngineConformance, PlatenForceIsFloorForceMinusWeight) {
   }
   EXPECT_LT(e->platen_position(), c.height);
   EXPECT_GT(e->platen_position(), 5.9e-3);  // on the stack, not through it
+}
+
+// Gravity turned towards one side wall at a time: a cube resting against that wall pushes
+// it with its weight m·g (1 %), wall_force() of every other wall is zero, and wall_force()
+// is the sum of the normal components of that wall's contacts (the per-wall force a K0
+// measurement reads; floor and platen agree with floor_force() and platen_force()).
+TEST_P(EngineConformance, SideWallCarriesASidewaysWeight) {
+  std::vector<int> walls = {kWallXMin, kWallXMax};
+  if (dim() == 3) walls.insert(walls.end(), {kWallYMin, kWallYMax});
+  const auto s = cube();
+  const double mg = mass(s) * kG;
+  const Container c = box(10e-3);
+  for (int w : walls) {
+    SCOPED_TRACE("wall " + std::to_string(w));
+    const Vec3 n = wall_inward_normal(w, dim());
+    auto e = make_with_gravity(n * -kG, Material{}, true);
+    e->set_container(c);
+    // 0.05 mm off the wall, halfway up the box and across it.
+    Vec3 p = dim() == 3 ? Vec3{5e-3, 5e-3, 5e-3} : Vec3{5e-3, 5e-3, 0};
+    const double gap = 1.05e-3;
+    if (w == kWallXMin) p.x = gap;
+    if (w == kWallXMax) p.x = c.lx - gap;
+    if (w == kWallYMin) p.y = gap;
+    if (w == kWallYMax) p.y = c.ly - gap;
+    e->add_grain(grain(0, s, p));
+    run(*e, 0.15);
+    const double dt = step_of(*e);
+    const long n_avg = std::max(50L, std::lround(0.01 / dt));
+    double mean = 0, from_contacts = 0, others = 0;
+    for (long k = 0; k < n_avg; ++k) {
+      e->step(dt);
+      mean += e->wall_force(w) / n_avg;
+      for (const auto& ct : e->contacts())
+        if (ct.wall == w) from_contacts += dot(ct.force, n) / n_avg;
+      for (int o : {kFloor, kPlaten, kWallXMin, kWallXMax, kWallYMin, kWallYMax})
+        if (o != w) others = std::max(others, std::abs(e->wall_force(o)));
+      EXPECT_EQ(e->wall_force(kFloor), e->floor_force());
+      EXPECT_EQ(e->wall_force(kPlaten), e->platen_force());
+    }
+    EXPECT_NEAR(mean, mg, 0.01 * mg);
+    EXPECT_NEAR(from_contacts, mean, 1e-9 * mg) << "wall_force() is the sum of the wall's contacts";
+    EXPECT_LE(others, 1e-9 * mg) << "no other wall is touched";
+  }
 }
 
 // Semi-implicit Euler gives v = −g·t and z = z0 − g·t²/2 − g·t·Δt/2; other integrators

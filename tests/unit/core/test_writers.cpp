@@ -134,7 +134,8 @@ TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
 
 TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
   // Two spheres of the 3D fixture: icosphere meshes (42 vertices) have sphericity < 1 and
-  // isotropic inertia, so EI = FI = 1.
+  // isotropic inertia; their extents along the principal axes (Zhu & Zhao 2019 §5) are the
+  // diameter within the facets' chord error, ≈ 2 % for 42 vertices, so EI, FI = 1 within 3 %.
   Fixture f("shape");
   {
     ShapeWriter w(f.dir.string(), 3);
@@ -146,7 +147,7 @@ TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
     w.on_sample(*f.sc.sim, s);  // same step: no second row
     RunSummary sum;
     w.on_finish(*f.sc.sim, s, sum);
-    EXPECT_NEAR(sum.extra["mean_zingg_ei_final"], 1.0, 1e-9);
+    EXPECT_NEAR(sum.extra["mean_zingg_ei_final"], 1.0, 0.03);
   }
   const auto rows = read_csv((f.dir / "shape.csv").string());
   ASSERT_EQ(rows.size(), 3u);
@@ -154,6 +155,32 @@ TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
   const double sph = std::stod(rows[2][5]);
   EXPECT_GT(sph, 0.95);
   EXPECT_LT(sph, 1.0);
-  EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 1e-9);
-  EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 1e-9);
+  EXPECT_NEAR(std::stod(rows[2][6]), 1.0, 0.03);
+  EXPECT_NEAR(std::stod(rows[2][7]), 1.0, 0.03);
+}
+
+TEST(SeriesWriter, K0IsTheLastColumnAndEmptyWithoutVerticalStress) {
+  // Two spheres on the floor, clear of the side walls: the walls carry nothing, so K0 = 0 once
+  // the platen carries a stress, and an empty cell (never NaN) while it carries none.
+  Fixture f("series_k0");
+  RunSummary sum;
+  {
+    SeriesWriter w(f.dir.string());
+    RunState s;
+    s.step = 1;
+    s.platen_height = 0.006;
+    w.on_sample(*f.sc.sim, s);
+    s.step = 2;
+    s.platen_stress = 1e6;
+    w.on_sample(*f.sc.sim, s);
+    w.on_finish(*f.sc.sim, s, sum);
+  }
+  const auto rows = read_csv((f.dir / "series.csv").string());
+  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(rows[0].size(), 14u);
+  EXPECT_EQ(rows[0][12], "floor_force_N");  // the earlier columns keep their order
+  EXPECT_EQ(rows[0][13], "k0");
+  EXPECT_EQ(rows[1][13], "");
+  EXPECT_EQ(rows[2][13], "0");
+  EXPECT_EQ(sum.extra["k0_final"], 0.0);
 }

@@ -125,14 +125,14 @@ TEST(ShapeMetrics3D, SphereClosedForms) {
   EXPECT_NEAR(sphericity(4.0 / 3.0 * kPi, 4 * kPi), 1.0, 1e-15);
   // Cube: π^(1/3) 6^(2/3) / 6.
   EXPECT_NEAR(sphericity(1.0, 6.0), std::cbrt(kPi) * std::pow(6.0, 2.0 / 3.0) / 6.0, 1e-15);
-  // A level-5 icosphere (10242 vertices): area error ≈ 1e-3 relative; icosahedral symmetry
-  // keeps the inertia isotropic, so EI = FI = 1 to round-off.
+  // A level-5 icosphere (10242 vertices): area error ≈ 1e-3 relative; its extents along any
+  // three orthogonal axes are the diameter within the chord error, so EI = FI = 1 to 1e-3.
   const TriMesh m = scaled_icosphere(5, {1e-3, 1e-3, 1e-3});
   const auto s = shape_metrics_3d(m, polyhedron_mass_properties(m));
   EXPECT_NEAR(s.sphericity, 1.0, 1e-3);
   EXPECT_LE(s.sphericity, 1.0);
-  EXPECT_NEAR(s.elongation, 1.0, 1e-9);
-  EXPECT_NEAR(s.flatness, 1.0, 1e-9);
+  EXPECT_NEAR(s.elongation, 1.0, 1e-3);
+  EXPECT_NEAR(s.flatness, 1.0, 1e-3);
   EXPECT_NEAR(s.principal_dimensions[0], 2e-3, 2e-3 * 1e-3);
 }
 
@@ -158,13 +158,32 @@ TEST(ShapeMetrics3D, EllipsoidClosedForms) {
 }
 
 TEST(ShapeMetrics3D, BoxPrincipalDimensionsFollowTheSides) {
-  // A box's inertia V/3·diag(b² + c², …) gives an equivalent ellipsoid with axes ∝ the sides,
-  // so EI and FI are the side ratios exactly.
+  // Zhu & Zhao 2019 §5: the extents along the principal axes are the sides. The equivalent
+  // ellipsoid of the inertia V/3·diag(b² + c², …) has axes ∝ the sides (2·sqrt(5/12) each).
   const auto box = Shape::box({3e-3, 2e-3, 0.5e-3});
   const auto s = shape_metrics_3d(box->mesh(), box->mass_properties());
   EXPECT_NEAR(s.elongation, 2.0 / 3.0, 1e-12);
   EXPECT_NEAR(s.flatness, 0.25, 1e-12);
-  EXPECT_NEAR(s.principal_dimensions[0], 2 * 3e-3 * std::sqrt(5.0 / 3.0), 1e-12);
+  EXPECT_NEAR(s.principal_dimensions[0], 6e-3, 1e-12);
+  EXPECT_NEAR(s.principal_dimensions[2], 1e-3, 1e-12);
+  EXPECT_NEAR(equivalent_ellipsoid_axes(box->mass_properties().inertia, box->mass_properties().volume)[0],
+              2 * 3e-3 * std::sqrt(5.0 / 3.0), 1e-12);
+}
+
+TEST(ShapeMetrics3D, PrincipalExtentsOfARegularTetrahedron) {
+  // A regular tetrahedron (vertices (±1, ±1, ±1) mm with an even number of minus signs) has
+  // isotropic inertia, so x, y, z are principal axes, and it spans 2 mm along each.
+  TriMesh t;
+  t.vertices = {{1e-3, 1e-3, 1e-3}, {1e-3, -1e-3, -1e-3}, {-1e-3, 1e-3, -1e-3}, {-1e-3, -1e-3, 1e-3}};
+  t.triangles = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+  const MassProperties mp = polyhedron_mass_properties(t);
+  ASSERT_GT(mp.volume, 0);
+  const auto e = principal_extents(t, Mat3::identity());
+  EXPECT_NEAR(e[0], 2e-3, 1e-15);
+  EXPECT_NEAR(e[2], 2e-3, 1e-15);
+  // With an isotropic inertia every axis is principal and the extents depend on the axes
+  // the eigen-solver returns (here 2 to 2.3 mm): the paper's approach is only defined for
+  // grains with distinct principal moments (ShapeMetrics.h).
 }
 
 }  // namespace
