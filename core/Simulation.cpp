@@ -411,7 +411,12 @@ void Simulation::check_breakage(const RunState& st) {
     else if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
     else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken || (pieces < 2 && !crushed)) continue;
+    if (!results[k].broken) continue;
+    if (pieces < 2 && !crushed) {
+      // The model's verdict counts even when the builder could not split the grain (Grain.h).
+      ++grains_[candidates[k]].crush_count;
+      continue;
+    }
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;
@@ -446,6 +451,7 @@ void Simulation::check_breakage(const RunState& st) {
       c.parent = parent.id;
       c.origin = parent.origin;
       c.generation = parent.generation + 1;
+      c.crush_count = parent.crush_count + 1;
       c.shape = f.shape;
       c.material = parent.material;
       const Vec3 r = R * f.offset;
