@@ -3,6 +3,7 @@
 // values (Grain::strength), its screening and schedule defaults, and the figures it
 // reports for each analysis.
 #pragma once
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -18,6 +19,16 @@
 
 namespace crumble {
 
+// Per-point data of one analysis, for writers that draw it (e.g. the peridynamic lattice
+// with its damage, output.vtk_analyses): points in the analysed grain's body frame, and
+// fields named with their unit, one value (scalars) or one body-frame vector (vectors) per
+// point. Every value is finite.
+struct AnalysisPointCloud {
+  std::vector<Vec3> points;
+  std::vector<std::pair<std::string, std::vector<double>>> scalars;
+  std::vector<std::pair<std::string, std::vector<Vec3>>> vectors;
+};
+
 // The outcome of one breakage analysis of one grain.
 struct BreakageAnalysis {
   bool broken = false;
@@ -28,6 +39,8 @@ struct BreakageAnalysis {
   // Model-specific figures, named with their unit (e.g. "points", "force_at_split_N",
   // "sigma_1_Pa"); the names are those of BreakageModel::figure_names().
   std::vector<std::pair<std::string, double>> figures;
+  // Optional per-point data (null when the model has none); shared, so records copy it cheaply.
+  std::shared_ptr<const AnalysisPointCloud> points;
 
   void set_figure(const std::string& name, double v) {
     for (auto& f : figures)
@@ -70,6 +83,12 @@ class BreakageModel {
   // Screening force of g, N: a grain whose largest contact force is below it is not
   // analysed (when ScreeningSettings::force_threshold is on).
   virtual double threshold_force(const Grain&) const { return 0; }
+
+  // A per-grain scalar that says how hard the grain is loaded by `contacts` in the model's
+  // own terms, for writers (a VTK cell field): its name, ending in its unit, and its value
+  // (finite). Cheap: no analysis is run. An empty name means the model has none.
+  virtual std::string load_measure_name() const { return {}; }
+  virtual double load_measure(const Grain&, const Material&, std::span<const Contact>) const { return 0; }
 };
 
 }  // namespace crumble

@@ -56,6 +56,11 @@ struct Grain {
   Vec3 velocity;       // m/s
   Vec3 angular_velocity;  // rad/s, world frame
   StrengthState strength;
+  // Breakage verdicts in this grain's lineage: how many times the breakage model judged this
+  // grain or one of its ancestors broken. A child starts at its parent's count + 1; a grain
+  // the model judged broken but the fragment builder could not split (outcome no_split)
+  // stays in place and counts one more. So crush_count >= generation, and the difference is
+  // the number of unsplit verdicts along the lineage.
   int crush_count = 0;
 
   double mass(double density) const { return density * shape->volume(); }

@@ -1,6 +1,8 @@
 #include "core/Screening.h"
 
 #include <algorithm>
+#include <unordered_map>
+#include <utility>
 
 namespace crumble {
 
@@ -72,6 +74,27 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
   r.selected = true;
   r.reason = "selected";
   return r;
+}
+
+std::vector<std::vector<Contact>> contacts_by_grain(std::span<const Grain> grains, std::span<const Contact> contacts) {
+  std::unordered_map<GrainId, std::size_t> index;
+  for (std::size_t i = 0; i < grains.size(); ++i) index[grains[i].id] = i;
+  std::vector<std::vector<Contact>> on(grains.size());
+  for (const auto& c : contacts) {
+    auto ia = index.find(c.a);
+    if (ia != index.end()) on[ia->second].push_back(c);
+    if (!c.is_wall()) {
+      auto ib = index.find(c.b);
+      if (ib != index.end()) {
+        Contact r = c;
+        std::swap(r.a, r.b);
+        r.normal = -c.normal;
+        r.force = -c.force;
+        on[ib->second].push_back(r);
+      }
+    }
+  }
+  return on;
 }
 
 }  // namespace crumble

@@ -40,4 +40,9 @@ struct ScreeningResult {
 ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s,
                        double threshold_force = 0);
 
+// The contacts on each grain, in the order of `grains`: a grain–grain contact appears on
+// both grains, on b with a and b swapped and the normal and force reversed (the force on b).
+// Contacts naming a grain not in `grains` are skipped.
+std::vector<std::vector<Contact>> contacts_by_grain(std::span<const Grain> grains, std::span<const Contact> contacts);
+
 }  // namespace crumble

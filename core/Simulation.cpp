@@ -330,23 +330,7 @@ void Simulation::check_breakage(const RunState& st) {
   timings_.contacts += seconds_since(t0);
 
   t0 = Clock::now();
-  std::unordered_map<GrainId, std::size_t> index;
-  for (std::size_t i = 0; i < grains_.size(); ++i) index[grains_[i].id] = i;
-  std::vector<std::vector<Contact>> on(grains_.size());
-  for (const auto& c : all) {
-    auto ia = index.find(c.a);
-    if (ia != index.end()) on[ia->second].push_back(c);
-    if (!c.is_wall()) {
-      auto ib = index.find(c.b);
-      if (ib != index.end()) {
-        Contact r = c;
-        std::swap(r.a, r.b);
-        r.normal = -c.normal;
-        r.force = -c.force;
-        on[ib->second].push_back(r);
-      }
-    }
-  }
+  const std::vector<std::vector<Contact>> on = contacts_by_grain(grains_, all);
   std::vector<std::size_t> candidates;
   for (std::size_t i = 0; i < grains_.size(); ++i)
     if (screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i])).selected) candidates.push_back(i);
@@ -416,7 +400,12 @@ void Simulation::check_breakage(const RunState& st) {
     else if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
     else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken || (pieces < 2 && !crushed)) continue;
+    if (!results[k].broken) continue;
+    if (pieces < 2 && !crushed) {
+      // The model's verdict counts even when the builder could not split the grain (Grain.h).
+      ++grains_[candidates[k]].crush_count;
+      continue;
+    }
 
     const Material& mat = ctx_.materials[parent.material];
     BreakageEvent ev;
@@ -451,6 +440,7 @@ void Simulation::check_breakage(const RunState& st) {
       c.parent = parent.id;
       c.origin = parent.origin;
       c.generation = parent.generation + 1;
+      c.crush_count = parent.crush_count + 1;
       c.shape = f.shape;
       c.material = parent.material;
       const Vec3 r = R * f.offset;

@@ -23,7 +23,8 @@ namespace crumble {
 // Observer.h) or the registrar changes.
 // 2: BreakageAnalysis, named strength values, model-owned screening.
 // 3: RegistryEntry::options (core/Options.h), the implementation's declared option table.
-inline constexpr int kPluginAbi = 3;
+// 4: BreakageModel::load_measure, BreakageAnalysis::points.
+inline constexpr int kPluginAbi = 4;
 
 struct PluginRegistrar {
   Table<EngineFactory>& engines;

@@ -16,6 +16,7 @@
 #include "breakage/peridynamics/Peridynamics.h"
 #include "breakage/stress/StressModel.h"
 #include "geometry/level_set/LevelSetBuilder.h"
+#include "scenarios/VtkWriter.h"
 
 namespace crumble {
 
@@ -115,6 +116,8 @@ std::vector<NamedOptions> registered_options() {
   collect("engine", engines(), out);
   collect("breakage model", breakage_models(), out);
   collect("fragment builder", fragment_builders(), out);
+  // Output options declared in a table (the rest of "output" is read by the scenario factory).
+  out.push_back({"output", "output", "ParaView output of a run (docs/output.md)", &vtk_output_options()});
   return out;
 }
 

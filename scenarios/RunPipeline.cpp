@@ -14,6 +14,7 @@
 
 #include "scenarios/Checkpoint.h"
 #include "scenarios/Tools.h"
+#include "scenarios/VtkWriter.h"
 #include "scenarios/Writers.h"
 
 namespace crumble {
@@ -34,7 +35,7 @@ extern "C" void on_stop_signal(int sig) {
 bool is_run_output(const std::string& name) {
   static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv",
                                               "ncl.csv", "psd.csv", "shape.csv", "product_psd.csv", "product.csv",
-                                              "grains.pvd", "effective_scenario.json",
+                                              "grains.pvd", "scene.pvd", "analyses.pvd", "effective_scenario.json",
                                               "packing.json", "checkpoint.json"};
   for (const char* suffix : {"", ".part", ".tmp", ".part.tmp"}) {
     const std::string sfx = suffix;
@@ -44,12 +45,7 @@ bool is_run_output(const std::string& name) {
   }
   return false;
 }
-bool is_vtk_output(const std::string& name) {
-  // vtk/grains_NNNNNNNN.vtp (and its temporary name)
-  return name.rfind("grains_", 0) == 0 &&
-         (name.size() > 4 && (name.compare(name.size() - 4, 4, ".vtp") == 0 ||
-                              (name.size() > 8 && name.compare(name.size() - 8, 8, ".vtp.tmp") == 0)));
-}
+bool is_vtk_output(const std::string& name) { return is_vtk_file_name(name); }  // scenarios/VtkWriter.h
 
 // Entries of DIR that crumble wrote (vtk/ counted as one when it holds only snapshots).
 std::vector<std::string> run_outputs(const fs::path& dir, std::vector<std::string>* others) {

@@ -10,6 +10,7 @@
 #include "geometry/Format.h"
 #include "scenarios/InputChecks.h"
 #include "scenarios/Registry.h"
+#include "scenarios/VtkWriter.h"
 #include "scenarios/Walls.h"
 
 namespace crumble {
@@ -299,8 +300,13 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     if (!(sc.output.psd_at_strain[i] > 0 && sc.output.psd_at_strain[i] < 1))
       oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
   sc.output.shape_metrics = oc.boolean("shape_metrics", true);
-  sc.output.vtk_every = oc.integer("vtk_every", 0, 0);
-  sc.output.vtk_final = oc.boolean("vtk_final", true);
+  {
+    const Options vo(oc, vtk_output_options());
+    sc.output.vtk_every = vo.integer("vtk_every");
+    sc.output.vtk_final = vo.boolean("vtk_final");
+    sc.output.vtk_contacts = vo.boolean("vtk_contacts");
+    sc.output.vtk_analyses = vo.boolean("vtk_analyses");
+  }
   sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
   if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))

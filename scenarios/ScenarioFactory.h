@@ -18,6 +18,8 @@ struct OutputSettings {
   bool shape_metrics = true;             // shape.csv (means of the grains' shape descriptors per sample)
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
+  bool vtk_contacts = false;             // contact-force lines in each VTK snapshot
+  bool vtk_analyses = false;             // per-point data of breakage analyses (vtk/analysis_*.vtp)
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
 };
 

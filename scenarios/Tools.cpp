@@ -29,6 +29,7 @@
 #include "scenarios/Compare.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ShapeSpec.h"
+#include "scenarios/VtkWriter.h"
 #include "scenarios/Writers.h"
 
 namespace crumble {
@@ -247,7 +248,10 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   if (sc.output.shape_metrics)
     sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
-    sim.add_observer(std::make_shared<VtkWriter>(out, sc.output.vtk_every, sc.output.vtk_final, resumed ? st.step : -1));
+    sim.add_observer(std::make_shared<VtkWriter>(
+        out, VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts},
+        resumed ? st.step : -1));
+  if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));
   {
     // Fines: finer than the crushing limit (screening.min_diameter, Zhu & Zhao 2019 §5: grains

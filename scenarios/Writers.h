@@ -133,25 +133,7 @@ class ShapeWriter : public Observer {
   std::vector<double> last_means_;
 };
 
-// grains_NNNNNN.vtp snapshots (grain surfaces in world coordinates with id, generation,
-// diameter and the shape descriptors of GrainShapeMetrics) and grains.pvd, for ParaView.
-class VtkWriter : public Observer {
- public:
-  // resume_step >= 0: keep the snapshots of the earlier run up to that step.
-  VtkWriter(const std::string& dir, long every, bool final_state, long resume_step = -1);
-  void on_start(const Simulation& sim, const RunState& s) override;
-  void on_sample(const Simulation& sim, const RunState& s) override;
-  void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
-
- private:
-  void snapshot(const Simulation& sim, const RunState& s);
-  void write_collection() const;
-  std::string dir_;
-  long every_;
-  bool final_;
-  long last_ = -1;
-  std::vector<std::pair<double, std::string>> files_;
-};
+// ParaView output (VtkWriter, AnalysisVtkWriter): scenarios/VtkWriter.h.
 
 // Rows of a CSV file (header first), split at commas; empty when the file is missing.
 std::vector<std::vector<std::string>> read_csv(const std::string& path);

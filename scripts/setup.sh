@@ -6,7 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(g++ cmake make pkg-config libbullet-dev libode-dev libeigen3-dev libcgal-dev
-          nlohmann-json3-dev libgtest-dev libcli11-dev)
+          nlohmann-json3-dev libgtest-dev libcli11-dev
+          python3-vtk9)  # python3-vtk9: the suite reads the ParaView files back (tests/integration/paraview)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

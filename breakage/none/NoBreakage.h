@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <memory>
 
 #include "core/BreakageModel.h"
@@ -18,6 +19,15 @@ class NoBreakage : public BreakageModel {
     BreakageAnalysis a;
     a.outcome = "intact";
     return a;
+  }
+  // Nothing breaks, but how hard each grain is pressed still shows the force chains of a
+  // rigid run: the largest contact force on the grain.
+  std::string load_measure_name() const override { return "max_contact_force_N"; }
+  double load_measure(const Grain&, const Material&, std::span<const Contact> contacts) const override {
+    double f = 0;
+    for (const auto& c : contacts)
+      if (is_finite(c.force)) f = std::max(f, norm(c.force));
+    return f;
   }
 };
 

@@ -364,6 +364,45 @@ void PeridynamicsModel::inherit_strength(const Grain& parent, Grain& child, cons
   child.strength.set(kThreshold, pd_threshold_force(o_, gc, dc));
 }
 
+namespace {
+// The lattice of a split grain for writers (BreakageAnalysis::points), in the body frame:
+// per point the damage (Silling & Askari 2005: the broken share of its bonds, by the
+// bonds' partial-volume weights, 0 intact … 1 every bond broken), the piece it went to and
+// its displacement at the end of the analysis. Null when a value is not finite.
+std::shared_ptr<const AnalysisPointCloud> damage_cloud(const Lattice& L, const PdSystem& sys, const PointClusters& pc,
+                                                       const Quat& frame) {
+  auto cloud = std::make_shared<AnalysisPointCloud>();
+  const std::size_t n = L.size();
+  std::vector<double> damage(n, 0.0), piece(n, 0.0);
+  std::vector<Vec3> u(n);
+  const auto& alive = sys.alive();
+  cloud->points.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double total = 0, intact = 0;
+    for (std::int32_t b = L.offsets[i]; b < L.offsets[i + 1]; ++b) {
+      total += L.weight[b];
+      intact += alive[b];
+    }
+    damage[i] = total > 0 ? std::clamp(1.0 - intact / total, 0.0, 1.0) : 0.0;
+    piece[i] = i < pc.cluster.size() ? pc.cluster[i] : -1;
+    const auto k = static_cast<std::int32_t>(i);
+    u[i] = frame.rotate(Vec3{sys.displacement(k, 0), sys.displacement(k, 1), sys.displacement(k, 2)});
+    cloud->points.push_back(frame.rotate(L.points[i]));
+    if (!is_finite(u[i]) || !is_finite(cloud->points.back())) return nullptr;
+  }
+  cloud->scalars = {{"damage", std::move(damage)}, {"piece", std::move(piece)}};
+  cloud->vectors = {{"displacement_m", std::move(u)}};
+  return cloud;
+}
+}  // namespace
+
+double PeridynamicsModel::load_measure(const Grain&, const Material&, std::span<const Contact> contacts) const {
+  double f = 0;
+  for (const auto& c : contacts)
+    if (is_finite(c.force)) f = std::max(f, norm(c.force));
+  return f;
+}
+
 BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
                                             std::span<const Contact> contacts) const {
   const auto t0 = Clock::now();
@@ -451,6 +490,7 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
     pc.frame = frame;  // lattice frame → body frame
     force_at_split = r.lambda * fmax;
     if (pc.clusters < 2) return finish("split_into_fines");
+    a.points = damage_cloud(L, sys, pc, frame);
     a.broken = true;
     a.fracture = std::move(pc);
   }

@@ -137,13 +137,18 @@ class PeridynamicsModel final : public BreakageModel {
   // the split (N), 0 otherwise; points, bonds (directed CSR entries: each bond counted at
   // both ends) and steps (explicit steps; 0 when the static preload shows no bond can
   // break) describe the cost. load = largest contact force given. The fracture is a
-  // PointClusters in the body frame (reference positions).
+  // PointClusters in the body frame (reference positions). A split also sets `points`: the
+  // lattice with damage (broken share of each point's bonds), piece and displacement_m.
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   std::vector<std::string> figure_names() const override { return {"points", "bonds", "steps", "force_at_split_N"}; }
   // Zhu & Zhao 2019, §5: their screening, and a check every 0.08 MPa of platen stress.
   ScreeningSettings default_screening() const override { return zhu_zhao_screening(); }
   ScheduleSettings default_schedule() const override { return {0.08e6, 0}; }
   double threshold_force(const Grain& g) const override { return g.strength.get_or(kThreshold, 0); }
+  // The largest contact force on the grain: what Zhu & Zhao 2019 §3.1 compare with the
+  // grain's threshold_force_N (eqs. 12, 14) before any analysis.
+  std::string load_measure_name() const override { return "max_contact_force_N"; }
+  double load_measure(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   const PdOptions& options() const { return o_; }
 
  private:

@@ -295,6 +295,15 @@ void StressModel::inherit_strength(const Grain& parent, Grain& child, const Mate
   require(child.strength.has(stress::kStrength), "parent grain has no strength_Pa (assign_strength not called?)");
 }
 
+double StressModel::load_measure(const Grain& g, const Material&, std::span<const Contact> contacts) const {
+  std::vector<Contact> loaded;
+  for (const auto& c : contacts)
+    if (is_finite(c.point) && is_finite(c.force) && norm2(c.force) > 0) loaded.push_back(c);
+  if (loaded.empty() || !g.shape || !is_finite(g.position)) return 0;
+  const double eq = criterion_->equivalent_stress(principal_stresses(average_stress(g.position, g.shape->volume(), loaded), dim_));
+  return std::isfinite(eq) ? eq : 0;
+}
+
 BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span<const Contact> contacts) const {
   const auto t0 = Clock::now();
   BreakageAnalysis a;

@@ -115,6 +115,10 @@ class StressModel final : public BreakageModel {
   // steps (the paper checks each step; 100 keeps the cost of contact extraction small).
   ScreeningSettings default_screening() const override;
   ScheduleSettings default_schedule() const override { return {0.0, 100}; }
+  // The criterion's equivalent stress of the average stress (eq. 5; eqs. 7–10), the value
+  // compared with strength_Pa.
+  std::string load_measure_name() const override { return "equivalent_stress_Pa"; }
+  double load_measure(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   const StressOptions& options() const { return o_; }
 
  private:

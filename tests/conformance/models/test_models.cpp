@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -150,6 +151,70 @@ TEST_P(ModelConformance, DegenerateInputGivesACountedOutcome) {
     ASSERT_NO_THROW(a = m->analyse(g, Material{}, cs)) << what;
     expect_counted(a, what);
     if (cs.empty()) EXPECT_FALSE(a.broken) << "nothing loads the grain";
+  }
+}
+
+// BreakageModel::load_measure (a VTK cell field, docs/output.md): finite, 0 without a
+// contact, growing with the load; a name ending in its unit. The built-in models against
+// their closed forms: stress, the von Mises equivalent stress of eq. 5 under the diametral
+// pair, 3P/(2πR²) (3D) or 2P/(πR) (2D); peridynamics, the largest contact force P.
+TEST_P(ModelConformance, LoadMeasureIsFiniteAndFollowsTheLoad) {
+  const auto m = make();
+  const std::string name = m->load_measure_name();
+  if (name.empty()) GTEST_SKIP() << GetParam().name << " declares no load measure";
+  EXPECT_NE(name.rfind('_'), std::string::npos) << name << ": the name ends in its unit (e.g. _Pa, _N)";
+  const Grain g = grain(*m);
+  const Profile pr = profile(GetParam().name, dim());
+  const double none = m->load_measure(g, Material{}, {});
+  const double lo = m->load_measure(g, Material{}, diametral(g, pr.below));
+  const double hi = m->load_measure(g, Material{}, diametral(g, pr.above));
+  EXPECT_EQ(none, 0.0);
+  EXPECT_TRUE(std::isfinite(lo) && std::isfinite(hi));
+  EXPECT_GT(lo, 0.0);
+  EXPECT_GT(hi, lo);
+  if (GetParam().name == "stress") {
+    const double P = pr.above;
+    const double expect = dim() == 3 ? 3 * P / (2 * kPi * kR * kR) : 2 * P / (kPi * kR);
+    EXPECT_NEAR(hi, expect, 1e-9 * expect);
+  } else if (GetParam().name == "peridynamics") {
+    EXPECT_NEAR(hi, pr.above, 1e-12 * pr.above);
+  }
+}
+
+// BreakageAnalysis::points (output.vtk_analyses): when a model returns per-point data, every
+// field has one entry per point and every value is finite; peridynamics' split returns its
+// lattice with damage in [0, 1], some of it broken.
+TEST_P(ModelConformance, AnalysisPointsAreConsistent) {
+  const auto m = make();
+  if (!m->active()) GTEST_SKIP() << "an inactive model never analyses";
+  const Grain g = grain(*m);
+  const auto a = m->analyse(g, Material{}, diametral(g, profile(GetParam().name, dim()).above));
+  if (GetParam().name == "peridynamics") ASSERT_TRUE(a.points) << "a peridynamic split returns its lattice";
+  if (!a.points) GTEST_SKIP() << GetParam().name << " returns no per-point data";
+  const auto& c = *a.points;
+  ASSERT_GT(c.points.size(), 0u);
+  for (const auto& p : c.points) {
+    EXPECT_TRUE(is_finite(p));
+    EXPECT_LT(norm(p), 2 * kR) << "body frame: inside the grain's reach";
+  }
+  for (const auto& [name, v] : c.scalars) {
+    EXPECT_EQ(v.size(), c.points.size()) << name;
+    for (double x : v) EXPECT_TRUE(std::isfinite(x)) << name;
+  }
+  for (const auto& [name, v] : c.vectors) {
+    EXPECT_EQ(v.size(), c.points.size()) << name;
+    for (const auto& x : v) EXPECT_TRUE(is_finite(x)) << name;
+  }
+  if (GetParam().name == "peridynamics") {
+    double max_damage = 0;
+    for (const auto& [name, v] : c.scalars)
+      if (name == "damage")
+        for (double x : v) {
+          EXPECT_GE(x, 0.0);
+          EXPECT_LE(x, 1.0);
+          max_damage = std::max(max_damage, x);
+        }
+    EXPECT_GT(max_damage, 0.0) << "a split grain has broken bonds";
   }
 }
 

@@ -55,11 +55,12 @@ class SqueezeEngine : public Engine {
 // Breaks a grain when the largest contact force exceeds its strength.
 class ThresholdModel : public BreakageModel {
  public:
-  explicit ThresholdModel(double delay_s = 0) : delay_(delay_s) {}
+  // Children get `child_factor` × their parent's limit (1000: they never break here).
+  explicit ThresholdModel(double delay_s = 0, double child_factor = 1000) : delay_(delay_s), child_factor_(child_factor) {}
   std::string name() const override { return "threshold"; }
   void assign_strength(Grain& g, const Material&, Rng& rng) const override { g.strength.set("limit_N", 50 + 50 * rng.uniform()); }
   void inherit_strength(const Grain& p, Grain& c, const Material&, Rng&) const override {
-    c.strength.set("limit_N", 1000 * p.strength.get("limit_N"));  // children never break here
+    c.strength.set("limit_N", child_factor_ * p.strength.get("limit_N"));
   }
   BreakageAnalysis analyse(const Grain& g, const Material&, std::span<const Contact> cs) const override {
     if (delay_ > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay_));
@@ -72,7 +73,16 @@ class ThresholdModel : public BreakageModel {
   }
 
  private:
-  double delay_;
+  double delay_, child_factor_;
+};
+
+// Returns the parent whole (one piece): the Simulation reports no_split and keeps the grain.
+class WholeBuilder : public FragmentBuilder {
+ public:
+  std::string name() const override { return "whole"; }
+  FragmentResult build(const Shape& parent, const Fracture&) const override {
+    return {{{Shape::sphere(std::cbrt(parent.volume() * 3 / (4 * kPi))), {0, 0, 0}}}, "whole", 0};
+  }
 };
 
 // A sphere → one sphere of 7/8 of the volume at +x and one of 1/8 at −x (volume exact).
@@ -265,4 +275,82 @@ TEST(SimulationLoop, StressRampChecksFollowTheCommandNotAMeasuredPeak) {
   // without the peak at step 15 (3 checks done by then).
   EXPECT_GE(calm.analyses, 9);
   EXPECT_EQ(spiked.analyses, calm.analyses);
+}
+
+namespace {
+struct Lineage {
+  std::vector<Grain> grains;
+  std::map<GrainId, int> no_split;  // no_split records per grain
+  long events = 0;
+};
+
+Lineage run_lineage(std::unique_ptr<FragmentBuilder> builder, double child_factor) {
+  EngineContext ctx;
+  SimulationSettings ss;
+  ss.time_steps = {{1e300, 1e-3}};
+  ss.sample_every = 1;
+  ss.guards.containment = false;
+  LoadingSettings ls;
+  ls.mode = "strain_rate";
+  ls.strain_rate = 1.0;
+  ls.stop_force = 400;
+  ScheduleSettings sch;
+  sch.every_steps = 5;
+  ScreeningSettings scr;
+  scr.force_threshold = false;
+  scr.min_diameter = 0;
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(0, child_factor),
+                 std::move(builder), ctx, ss, ls, sch, scr, 7);
+  sim.set_container({0.01, 0.01, 0.01, 0});
+  for (int i = 0; i < 4; ++i) {
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    g.position = {2e-3 * i, 0, 0};
+    sim.add_grain(g);
+  }
+  Lineage r;
+  struct Rec : Observer {
+    Lineage* r;
+    void on_analysis(const Simulation&, const AnalysisRecord& a) override {
+      if (a.analysis.outcome == "no_split") ++r->no_split[a.grain];
+    }
+  };
+  auto o = std::make_shared<Rec>();
+  o->r = &r;
+  sim.add_observer(o);
+  r.events = sim.run().breakage_events;
+  r.grains = sim.grains();
+  return r;
+}
+}  // namespace
+
+// Grain::crush_count counts the breakage verdicts of the lineage: a child starts at its
+// parent's count + 1, so with every verdict splitting the grain it equals the generation.
+TEST(SimulationLoop, CrushCountFollowsTheLineage) {
+  // Children as strong as their parent (factor 1.01): they break again as the load grows.
+  const Lineage r = run_lineage(std::make_unique<EighthBuilder>(), 1.01);
+  ASSERT_GT(r.events, 4);
+  int second = 0;
+  for (const auto& g : r.grains) {
+    EXPECT_EQ(g.crush_count, g.generation) << "grain " << g.id;
+    if (g.generation >= 2) ++second;
+  }
+  EXPECT_GT(second, 0) << "no grandchild: the test would not see the count carried over";
+}
+
+// A verdict the builder cannot split (no_split) keeps the grain and still counts: the
+// count is the number of no_split records of that grain.
+TEST(SimulationLoop, CrushCountCountsUnsplitVerdicts) {
+  const Lineage r = run_lineage(std::make_unique<WholeBuilder>(), 1000);
+  EXPECT_EQ(r.events, 0);
+  ASSERT_EQ(r.grains.size(), 4u);
+  int total = 0;
+  for (const auto& g : r.grains) {
+    EXPECT_EQ(g.generation, 0);
+    const auto it = r.no_split.find(g.id);
+    const int expect = it == r.no_split.end() ? 0 : it->second;
+    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
+    total += g.crush_count;
+  }
+  EXPECT_GE(total, 4) << "every grain is loaded past its limit; each must have been judged broken";
 }

@@ -1,0 +1,91 @@
+// ParaView output (docs/output.md "ParaView"): VTK XML files written as Observers, each to a
+// temporary name and renamed into place when complete.
+//
+// - VtkWriter: per snapshot vtk/grains_NNNNNNNN.vtp (grain surfaces with per-grain cell
+//   fields), vtk/walls_NNNNNNNN.vtp (container walls and moving walls), vtk/platen_NNNNNNNN.vtp
+//   (closed containers), vtk/contacts_NNNNNNNN.vtp (output.vtk_contacts) and
+//   vtk/scene_NNNNNNNN.vtm, a multiblock naming those files; the series grains.pvd (grains
+//   only) and scene.pvd (every block).
+// - AnalysisVtkWriter (output.vtk_analyses): for every breakage whose analysis returned
+//   per-point data (BreakageAnalysis::points, e.g. the peridynamic lattice with its damage),
+//   vtk/analysis_NNNNNNNN_gID.vtp in world coordinates, listed in analyses.pvd.
+//
+// No NaN or infinity is ever written: a non-finite value is an error naming the field.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/Observer.h"
+#include "core/Options.h"
+#include "core/Simulation.h"
+
+namespace crumble {
+
+// The output options this family reads ("output" object of a scenario).
+const OptionTable& vtk_output_options();
+
+// One VTK PolyData piece in the XML format (.vtp). Cells are of one kind per piece
+// (vertices, lines or polygons); fields hold 1 or 3 components per point or cell.
+struct VtpPiece {
+  enum class Cells { Verts, Lines, Polys } kind = Cells::Polys;
+  std::vector<Vec3> points;
+  std::vector<std::vector<long>> cells;  // point indices per cell
+  struct Field {
+    std::string name;
+    int components = 1;
+    bool integer = false;
+    std::vector<double> values;  // components × count
+  };
+  std::vector<Field> point_fields, cell_fields;
+
+  Field& cell_field(const std::string& name, int components = 1, bool integer = false);
+  Field& point_field(const std::string& name, int components = 1, bool integer = false);
+};
+// The .vtp text; throws std::runtime_error naming the field when a value is not finite or a
+// field has the wrong length.
+std::string vtp_text(const VtpPiece& piece);
+
+class VtkWriter : public Observer {
+ public:
+  struct Settings {
+    long every = 0;           // steps between snapshots (0 = none)
+    bool final_state = true;  // a snapshot of the final state
+    bool contacts = false;    // contact-force lines (output.vtk_contacts)
+  };
+  // resume_step >= 0: keep the snapshots of the earlier run up to that step.
+  VtkWriter(const std::string& dir, Settings settings, long resume_step = -1);
+  void on_start(const Simulation& sim, const RunState& s) override;
+  void on_sample(const Simulation& sim, const RunState& s) override;
+  void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
+
+ private:
+  void snapshot(const Simulation& sim, const RunState& s);
+  void write_collections() const;
+  std::string dir_;
+  Settings set_;
+  long last_ = -1;
+  std::vector<std::pair<double, long>> steps_;  // (time, step) of every snapshot
+};
+
+class AnalysisVtkWriter : public Observer {
+ public:
+  // resume_step >= 0: keep the analyses of the earlier run up to that step.
+  AnalysisVtkWriter(const std::string& dir, long resume_step = -1);
+  void on_breakage(const Simulation& sim, const BreakageEvent& e) override;
+  void on_finish(const Simulation&, const RunState&, RunSummary&) override;
+
+ private:
+  void write_collection() const;
+  std::string dir_;
+  struct Entry {
+    double time;
+    std::string file;
+  };
+  std::vector<Entry> files_;
+};
+
+// Names a run writes into vtk/ (and their temporary names), for `--force` cleaning.
+bool is_vtk_file_name(const std::string& name);
+
+}  // namespace crumble
