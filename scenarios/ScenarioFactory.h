@@ -19,6 +19,7 @@ struct OutputSettings {
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
+  bool plots = true;                     // PNG figures at the end of `crumble run` (scenarios/Plots.h)
 };
 
 struct Scenario {
