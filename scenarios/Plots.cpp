@@ -141,7 +141,7 @@ const std::vector<std::string>& plot_file_names() {
   static const std::vector<std::string> names = {
       "ncl.png",         "psd.png",           "breakage.png",          "fractal_dimension.png",
       "shape.png",       "load_displacement.png", "stress_strain.png", "product_psd.png",
-      "compare_ncl.png", "compare_psd.png",   "compare_breakage.png",  "compare_stress_strain.png",
+      "compare_ncl.png", "compare_psd.png",   "compare_breakage.png",  "compare_stress_strain.png", "compare_load_displacement.png",
       "pareto.png"};
   return names;
 }
