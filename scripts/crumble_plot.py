@@ -17,7 +17,7 @@ by what the folder holds (each is written under a temporary name and renamed whe
     stress_strain.png     platen stress against axial strain (strain-controlled loading)
     product_psd.png       size distribution of the product (open scenes: jaw crusher)
   compare folder (comparison.csv): compare_ncl.png, compare_psd.png, compare_breakage.png,
-    compare_stress_strain.png: each run's curves overlaid
+    compare_stress_strain.png, compare_load_displacement.png: each run's curves overlaid
   sweep folder (sweep.csv): pareto.png, relative error against wall time, the front marked;
     and the compare figures of its runs
 
@@ -188,8 +188,11 @@ def plain_log_axis(ax, which="x"):
     """A log axis labelled 0.1, 0.2, 0.5, 1, 2, 5 ... instead of 10^k powers."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     axis = ax.xaxis if which == "x" else ax.yaxis
+    lo, hi = (ax.dataLim.intervalx if which == "x" else ax.dataLim.intervaly)
     (ax.set_xscale if which == "x" else ax.set_yscale)("log")
-    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    # Less than a decade of data (called after the curves are drawn): more labelled ticks.
+    narrow = lo > 0 and hi / lo < 12
+    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0) if narrow else (1.0, 2.0, 5.0)))
     axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     axis.set_minor_formatter(NullFormatter())
 
@@ -305,8 +308,16 @@ def plot_run(F, d):
         pts = [(x, r["void_ratio"]) for x, r in zip(s, series) if x > 0 and r["void_ratio"] > 0]
         if len(pts) >= 2:
             fig, ax = plt.subplots(figsize=(6.4, 4.6))
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1.4, color="tab:blue",
-                    marker="." if len(pts) < 60 else None, label="loading")
+            monotonic = all(b[0] >= 0.97 * a[0] for a, b in zip(pts, pts[1:]))
+            if monotonic:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1.4, color="tab:blue",
+                        marker="." if len(pts) < 60 else None, label="loading")
+            else:
+                # Strain-controlled or unloading after breakage: the samples, coloured by strain.
+                strain = [100 * r["axial_strain"] for x, r in zip(s, series) if x > 0 and r["void_ratio"] > 0]
+                sc = ax.scatter([p[0] for p in pts], [p[1] for p in pts], c=strain, s=6, cmap="viridis",
+                                label="samples")
+                fig.colorbar(sc, ax=ax, label="axial strain (%)")
             settle = effective.get("packing", {}).get("settle", {}) if isinstance(effective, dict) else {}
             e0, s0 = summary.get("void_ratio_initial"), settle.get("stress") if isinstance(settle, dict) else None
             if isinstance(e0, (int, float)) and isinstance(s0, (int, float)) and s0 > 0 and s0 / 1e6 < pts[0][0]:
@@ -482,9 +493,9 @@ def plot_shape(F, d, name, dim, mode):
         # Zingg diagram: x = EI = I/L, y = FI = S/I; the classes split at 2/3.
         ax.axvline(2 / 3, color="k", lw=0.8)
         ax.axhline(2 / 3, color="k", lw=0.8)
-        for (x, y, t) in ((0.83, 0.83, "equant"), (0.83, 0.3, "oblate (disc)"), (0.3, 0.83, "prolate (rod)"),
-                          (0.3, 0.3, "bladed")):
-            ax.text(x, y, t, ha="center", va="center", color="0.45", fontsize=9)
+        for (x, y, t) in ((0.83, 0.68, "equant"), (0.83, 0.02, "oblate (disc)"), (0.33, 0.68, "prolate (rod)"),
+                          (0.33, 0.02, "bladed")):
+            ax.text(x, y, t, ha="center", va="bottom", color="0.45", fontsize=9)
         if first:
             ax.scatter(first["zingg_ei"], first["zingg_fi"], s=12, alpha=0.6, color="tab:blue",
                        label=f"initial ({len(first['zingg_ei'])} grains)")
@@ -499,7 +510,7 @@ def plot_shape(F, d, name, dim, mode):
         ax.set_aspect("equal")
         ax.set_xlabel("elongation EI = I/L (–)")
         ax.set_ylabel("flatness FI = S/I (–)")
-        ax.legend(loc="lower left")
+        ax.legend(loc="center left")
         ax.set_title("Zingg diagram")
         if len(means) >= 2:
             x_strain = mode == "strain_rate"
@@ -586,6 +597,13 @@ def plot_compare(F, d, title):
             overlay("compare_breakage.png", "breakage events (cumulative)",
                     lambda s: ([r["platen_stress_Pa"] / 1e6 for r in s], [r["breakage_events"] for r in s]),
                     what="breakage events against stress")
+    if any(scene_type(e) == "single_grain" for _, _, _, e in data):
+        def load_disp(s):
+            if not s or "platen_height_m" not in s[0] or "platen_force_N" not in s[0]:
+                return [], []
+            return [1e3 * (s[0]["platen_height_m"] - r["platen_height_m"]) for r in s], [r["platen_force_N"] for r in s]
+        overlay("compare_load_displacement.png", "platen force (N)", load_disp, xlabel="platen displacement (mm)",
+                what="load–displacement")
     if strain:
         overlay("compare_stress_strain.png", "platen stress (MPa)",
                 lambda s: ([100 * r["axial_strain"] for r in s], [r["platen_stress_Pa"] / 1e6 for r in s]),
@@ -665,7 +683,7 @@ def plot_sweep(F, d, title):
     if costs and max(costs) / min(costs) > 20:
         plain_log_axis(ax)
     if logy:
-        ax.set_yscale("log")
+        plain_log_axis(ax, "y")
     ax.scatter([], [], s=55, facecolor="tab:red", edgecolor="tab:red", label="on the front")
     ax.scatter([], [], s=35, facecolor="white", edgecolor="0.3", label="dominated")
     ax.set_xlabel("wall time (s" + (", log scale)" if ax.get_xscale() == "log" else ")"))
