@@ -229,6 +229,18 @@ def read_series(d):
     return read_table(path, required=SERIES_COLS)
 
 
+def fold_not_reached(tables):
+    """A level never reached holds the final state again: one curve, labelled with both."""
+    if "final" not in tables:
+        return tables
+    missed = [k for k in tables if "not_reached" in k]
+    out = {k: v for k, v in tables.items() if k not in missed}
+    if missed:
+        out["final"] = [dict(r, _missed=[psd_label(m, tables[m]).split(" (")[0].replace("at ", "") for m in missed])
+                        for r in tables["final"]]
+    return out
+
+
 def read_psd(path):
     rows, _ = read_table(path, required=("label", "sieve_diameter_m", "percent_passing_by_mass"),
                          numeric=("platen_stress_Pa", "sieve_diameter_m", "percent_passing_by_mass"))
@@ -242,6 +254,10 @@ def psd_label(label, rows):
     if label == "initial":
         return "initial"
     if label == "final":
+        s = rows[0].get("platen_stress_Pa", math.nan)
+        missed = rows[0].get("_missed")
+        if missed:
+            return f"final ({s / 1e6:.3g} MPa; {', '.join(missed)} not reached)"
         return "final"
     s = rows[0].get("platen_stress_Pa", math.nan)
     stress = f"{s / 1e6:.3g} MPa" if math.isfinite(s) else ""
@@ -332,7 +348,7 @@ def plot_run(F, d):
 
     psd_path = os.path.join(d, "psd.csv")
     if os.path.exists(psd_path):
-        tables = read_psd(psd_path)
+        tables = fold_not_reached(read_psd(psd_path))
         if tables:
             fig, ax = plt.subplots(figsize=(6.4, 4.6))
             plot_psd_axes(ax, tables)
@@ -493,14 +509,15 @@ def plot_shape(F, d, name, dim, mode):
         # Zingg diagram: x = EI = I/L, y = FI = S/I; the classes split at 2/3.
         ax.axvline(2 / 3, color="k", lw=0.8)
         ax.axhline(2 / 3, color="k", lw=0.8)
-        for (x, y, t) in ((0.83, 0.68, "equant"), (0.83, 0.02, "oblate (disc)"), (0.33, 0.68, "prolate (rod)"),
-                          (0.33, 0.02, "bladed")):
-            ax.text(x, y, t, ha="center", va="bottom", color="0.45", fontsize=9)
+        box = {"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 1}
+        for (x, y, t, ha, va) in ((0.68, 1.0, "equant", "left", "top"), (1.0, 0.01, "oblate (disc)", "right", "bottom"),
+                                  (0.01, 1.0, "prolate (rod)", "left", "top"), (0.65, 0.01, "bladed", "right", "bottom")):
+            ax.text(x, y, t, ha=ha, va=va, color="0.35", fontsize=9, bbox=box, zorder=4)
         if first:
-            ax.scatter(first["zingg_ei"], first["zingg_fi"], s=12, alpha=0.6, color="tab:blue",
-                       label=f"initial ({len(first['zingg_ei'])} grains)")
             ax.scatter(last["zingg_ei"], last["zingg_fi"], s=12, alpha=0.6, color="tab:red", marker="^",
-                       label=f"final ({len(last['zingg_ei'])} grains)")
+                       label=f"final ({len(last['zingg_ei'])} grains)", zorder=2)
+            ax.scatter(first["zingg_ei"], first["zingg_fi"], s=28, alpha=0.8, facecolor="none", edgecolor="tab:blue",
+                       label=f"initial ({len(first['zingg_ei'])} grains)", zorder=3)
         if len(means) >= 2:
             ax.plot([r["mean_EI"] for r in means], [r["mean_FI"] for r in means], color="k", lw=1.2,
                     label="mean, start → end")
@@ -510,7 +527,7 @@ def plot_shape(F, d, name, dim, mode):
         ax.set_aspect("equal")
         ax.set_xlabel("elongation EI = I/L (–)")
         ax.set_ylabel("flatness FI = S/I (–)")
-        ax.legend(loc="center left")
+        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 0.06))
         ax.set_title("Zingg diagram")
         if len(means) >= 2:
             x_strain = mode == "strain_rate"

@@ -1,6 +1,7 @@
 // The figures of an output folder (scenarios/Plots.h, scripts/crumble_plot.py): `crumble plot`
-// on a checked-in crushable run (data/zhu_zhao_small, rows of a real run of
-// oedometer_zhu_zhao_quick.json), the figures at the end of a tiny `crumble run`, a sweep
+// on a checked-in crushable run (data/zhu_zhao_quick_8MPa: the CSVs and JSON files of
+// oedometer_zhu_zhao_quick.json stopped with SIGINT at 8.56 MPa, 100 -> 235 grains, 105 breakage
+// events; no VTK files, so shape.png draws the means of shape.csv), the figures at the end of a tiny `crumble run`, a sweep
 // folder, and the messages when a CSV is missing or garbled or no matplotlib is there.
 #include <gtest/gtest.h>
 
@@ -42,7 +43,7 @@ fs::path fresh_dir(const std::string& name) {
 
 fs::path copy_fixture(const std::string& name) {
   const fs::path d = fresh_dir(name);
-  fs::copy(fs::path(CRUMBLE_SOURCE_DIR) / "tests/integration/plots/data/zhu_zhao_small", d,
+  fs::copy(fs::path(CRUMBLE_SOURCE_DIR) / "tests/integration/plots/data/zhu_zhao_quick_8MPa", d,
            fs::copy_options::recursive);
   return d;
 }
