@@ -412,17 +412,23 @@ def plot_run(F, d):
 
     if scene == "single_grain" and len(series) >= 2 and "platen_force_N" in header and "platen_height_m" in header:
         h0 = series[0]["platen_height_m"]
-        disp = [1e3 * (h0 - r["platen_height_m"]) for r in series]
+        disp = [h0 - r["platen_height_m"] for r in series]
+        # Micrometres for a stiff grain's few-µm travel, millimetres otherwise.
+        um = max(abs(x) for x in disp) < 1e-4
+        disp = [x * (1e6 if um else 1e3) for x in disp]
         force = [r["platen_force_N"] for r in series]
         fig, ax = plt.subplots(figsize=(6.4, 4.6))
         ax.plot(disp, force, lw=1.6, color="tab:blue")
         ev = [i for i in range(1, len(series)) if series[i]["breakage_events"] > series[i - 1]["breakage_events"]]
         if ev:
-            i = ev[0]
-            ax.plot([disp[i]], [force[i]], "rv", ms=8, label=f"first breakage at {force[i]:.4g} N")
+            # The last sample before the first breakage: the peak the grain carried.
+            i = ev[0] - 1
+            crush = summary.get("crushing_force_N")
+            what = (f"crushing force {crush:.4g} N (summary.json)" if isinstance(crush, (int, float))
+                    else f"last sample before the first breakage, {force[i]:.4g} N")
+            ax.plot([disp[i]], [force[i]], "rv", ms=8, label=what)
             ax.legend(loc="upper left")
-        peak = summary.get("crushing_force_N")
-        ax.set_xlabel("platen displacement (mm)")
+        ax.set_xlabel("platen displacement (µm)" if um else "platen displacement (mm)")
         ax.set_ylabel("platen force (N)")
         ax.set_title(f"{name}: load–displacement")
         F.save(fig, d, "load_displacement.png")
@@ -618,8 +624,8 @@ def plot_compare(F, d, title):
         def load_disp(s):
             if not s or "platen_height_m" not in s[0] or "platen_force_N" not in s[0]:
                 return [], []
-            return [1e3 * (s[0]["platen_height_m"] - r["platen_height_m"]) for r in s], [r["platen_force_N"] for r in s]
-        overlay("compare_load_displacement.png", "platen force (N)", load_disp, xlabel="platen displacement (mm)",
+            return [1e6 * (s[0]["platen_height_m"] - r["platen_height_m"]) for r in s], [r["platen_force_N"] for r in s]
+        overlay("compare_load_displacement.png", "platen force (N)", load_disp, xlabel="platen displacement (µm)",
                 what="load–displacement")
     if strain:
         overlay("compare_stress_strain.png", "platen stress (MPa)",

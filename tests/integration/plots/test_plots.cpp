@@ -95,12 +95,17 @@ TEST(Plots, MissingOrGarbledCsvIsAnErrorNamingTheFile) {
   }
   {
     const fs::path d = copy_fixture("garbled_psd");
+    // Line 2's percent_passing_by_mass (the fourth field) becomes "12 %".
     std::string psd = slurp(d / "psd.csv");
-    psd.replace(psd.find('\n', psd.find('\n') + 1) - 1, 1, "x");  // a number of line 2 ends in "x"
+    std::size_t at = psd.find('\n') + 1;
+    for (int k = 0; k < 3; ++k) at = psd.find(',', at) + 1;
+    psd.replace(at, psd.find(',', at) - at, "12 %");
     std::ofstream(d / "psd.csv") << psd;
     const auto r = run_cli("plot " + d.string());
     EXPECT_EQ(r.status, 2) << r.output;
-    EXPECT_NE(r.output.find("psd.csv: line 2"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("psd.csv: line 2: column 'percent_passing_by_mass': '12 %' is not a number"),
+              std::string::npos)
+        << r.output;
   }
   {
     const fs::path d = copy_fixture("short_header");
