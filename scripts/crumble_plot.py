@@ -191,8 +191,9 @@ def plain_log_axis(ax, which="x"):
     lo, hi = (ax.dataLim.intervalx if which == "x" else ax.dataLim.intervaly)
     (ax.set_xscale if which == "x" else ax.set_yscale)("log")
     # Less than a decade of data (called after the curves are drawn): more labelled ticks.
-    narrow = lo > 0 and hi / lo < 12
-    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0) if narrow else (1.0, 2.0, 5.0)))
+    ratio = hi / lo if lo > 0 else math.inf
+    subs = (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0) if ratio < 12 else (1.0, 2.0, 5.0) if ratio < 1e4 else (1.0,)
+    axis.set_major_locator(LogLocator(base=10, subs=subs))
     axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     axis.set_minor_formatter(NullFormatter())
 
@@ -329,8 +330,12 @@ def plot_run(F, d):
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1.4, color="tab:blue",
                         marker="." if len(pts) < 60 else None, label="loading")
             else:
-                # Strain-controlled or unloading after breakage: the samples, coloured by strain.
-                strain = [100 * r["axial_strain"] for x, r in zip(s, series) if x > 0 and r["void_ratio"] > 0]
+                # Strain-controlled or unloading after breakage: the samples, coloured by strain;
+                # those of a cell that has (almost) lost its load path, below 0.1 % of the peak,
+                # are left out.
+                keep = [(x, r) for x, r in zip(s, series) if x > 1e-3 * max(s) and r["void_ratio"] > 0]
+                pts = [(x, r["void_ratio"]) for x, r in keep]
+                strain = [100 * r["axial_strain"] for _, r in keep]
                 sc = ax.scatter([p[0] for p in pts], [p[1] for p in pts], c=strain, s=6, cmap="viridis",
                                 label="samples")
                 fig.colorbar(sc, ax=ax, label="axial strain (%)")
@@ -559,7 +564,8 @@ def run_folders(d):
     axes = header[:header.index("folder")]
     out = []
     for r in rows:
-        label = ", ".join(f"{a.split('.')[-1]}={r[a]}" for a in axes) or r["folder"]
+        label = ", ".join(f"{a.split('.')[-1]}={r[a]:g}" if isinstance(r[a], float) else f"{a.split('.')[-1]}={r[a]}"
+                          for a in axes) or str(r["folder"])
         if r["status"] != "ok":
             label += f" ({r['status']})"
         out.append((label, os.path.join(d, r["folder"])))
@@ -678,7 +684,7 @@ def plot_sweep(F, d, title):
             front = float(r["on_front"]) == 1
         except ValueError:
             raise DataError(f"{path}: line {n}: wall_seconds, error, reference or on_front is not a number")
-        label = ", ".join(r[p] for p in params) or r["folder"]
+        label = ", ".join(f"{r[p]:g}" if isinstance(r[p], float) else str(r[p]) for p in params) or str(r["folder"])
         pts.append((cost, err, ref, front, label))
     if not pts:
         raise DataError(f"{path}: no setting ran to the end (status ok)")
@@ -702,7 +708,11 @@ def plot_sweep(F, d, title):
                    facecolor="tab:red" if on else "white", edgecolor="tab:red" if on else "0.3", zorder=2)
         ax.annotate(label + (" (reference)" if ref else ""), (cost, ey(err)), textcoords="offset points",
                     xytext=(6, 4), fontsize=8)
-    costs = [p[0] for p in pts if p[0] > 0]
+    missing = [p[4] for p in pts if not math.isfinite(p[1])]
+    if missing:
+        ax.text(0.02, 0.02, "no finite error (a metric the reference has was never reached): " + ", ".join(missing),
+                transform=ax.transAxes, fontsize=8, color="0.35", va="bottom")
+    costs = [p[0] for p in pts if p[0] > 0 and math.isfinite(p[1])]
     if costs and max(costs) / min(costs) > 20:
         plain_log_axis(ax)
     if logy:
