@@ -206,6 +206,24 @@ def positive_pairs(xs, ys):
     return zip(*[(x, y) for x, y in zip(xs, ys) if x > 0 and math.isfinite(y)]) if any(x > 0 for x in xs) else ([], [])
 
 
+def grains_text(n):
+    return f"{n} grain" + ("" if n == 1 else "s")
+
+
+def monotonic_stress(rows):
+    v = [r["platen_stress_Pa"] for r in rows]
+    return all(b >= 0.97 * a for a, b in zip(v, v[1:]))
+
+
+def progress_axis(rows, mode):
+    """(x values, axis label, word) for 'against' plots: axial strain for strain-controlled
+    loading and wherever the stress falls back (a grain that broke unloads the platen), else
+    the platen stress."""
+    if mode == "strain_rate" or not monotonic_stress(rows):
+        return [100 * r["axial_strain"] for r in rows], "axial strain (%)", "strain"
+    return [r["platen_stress_Pa"] / 1e6 for r in rows], "platen stress (MPa)", "stress"
+
+
 def loading_mode(effective):
     lo = effective.get("loading", {}) if isinstance(effective, dict) else {}
     return lo.get("mode", "stress_ramp") if isinstance(lo, dict) else "stress_ramp"
@@ -364,9 +382,9 @@ def plot_run(F, d):
             ax.set_title(f"{name}: particle size distribution")
             F.save(fig, d, "psd.png")
 
-    if breaks and len(series) >= 2:
-        x_is_strain = mode == "strain_rate"
-        xs = [100 * r["axial_strain"] for r in series] if x_is_strain else s
+    if breaks and len(series) >= 2 and scene != "single_grain":  # a single grain: load_displacement.png
+        xs, xlabel, _ = progress_axis(series, mode)
+        x_is_strain = xlabel.startswith("axial")
         per_rows = []
         per = os.path.join(d, "breakage_per_mpa.csv")
         if os.path.exists(per) and not x_is_strain:
@@ -378,7 +396,7 @@ def plot_run(F, d):
         ax1.plot(xs, [r["grains"] for r in series], color="tab:blue", lw=1.6, label="grains in the engine")
         ax1.plot(xs, [r["breakage_events"] for r in series], color="tab:red", lw=1.6, ls="--",
                  label="breakage events (cumulative)")
-        ax1.set_xlabel("axial strain (%)" if x_is_strain else "platen stress (MPa)")
+        ax1.set_xlabel(xlabel)
         ax1.set_ylabel("count")
         ax1.legend(loc="upper left")
         ax1.set_title(f"{name}: grains and breakage events")
@@ -489,8 +507,8 @@ def plot_shape(F, d, name, dim, mode):
                                     ("Harmon et al. 2020, eq. 23", "short / long axis")):
             if first:
                 bins = [i / 20 for i in range(21)]
-                ax.hist(first[n], bins=bins, alpha=0.55, color="tab:blue", label=f"initial ({len(first[n])} grains)")
-                ax.hist(last[n], bins=bins, alpha=0.55, color="tab:red", label=f"final ({len(last[n])} grains)")
+                ax.hist(first[n], bins=bins, alpha=0.55, color="tab:blue", label=f"initial ({grains_text(len(first[n]))})")
+                ax.hist(last[n], bins=bins, alpha=0.55, color="tab:red", label=f"final ({grains_text(len(last[n]))})")
                 ax.legend(loc="upper left")
             ax.set_xlabel(f"{title} (–)")
             ax.set_ylabel("grains")
@@ -523,12 +541,12 @@ def plot_shape(F, d, name, dim, mode):
         box = {"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 1}
         for (x, y, t, ha, va) in ((0.68, 1.0, "equant", "left", "top"), (1.0, 0.01, "oblate (disc)", "right", "bottom"),
                                   (0.01, 1.0, "prolate (rod)", "left", "top"), (0.65, 0.01, "bladed", "right", "bottom")):
-            ax.text(x, y, t, ha=ha, va=va, color="0.35", fontsize=9, bbox=box, zorder=4)
+            ax.text(x, y, t, ha=ha, va=va, color="0.35", fontsize=9, bbox=box, zorder=1)
         if first:
             ax.scatter(last["zingg_ei"], last["zingg_fi"], s=12, alpha=0.6, color="tab:red", marker="^",
-                       label=f"final ({len(last['zingg_ei'])} grains)", zorder=2)
+                       label=f"final ({grains_text(len(last['zingg_ei']))})", zorder=2)
             ax.scatter(first["zingg_ei"], first["zingg_fi"], s=28, alpha=0.8, facecolor="none", edgecolor="tab:blue",
-                       label=f"initial ({len(first['zingg_ei'])} grains)", zorder=3)
+                       label=f"initial ({grains_text(len(first['zingg_ei']))})", zorder=3)
         if len(means) >= 2:
             ax.plot([r["mean_EI"] for r in means], [r["mean_FI"] for r in means], color="k", lw=1.2,
                     label="mean, start → end")
@@ -541,16 +559,15 @@ def plot_shape(F, d, name, dim, mode):
         ax.legend(loc="lower left", bbox_to_anchor=(0.0, 0.06))
         ax.set_title("Zingg diagram")
         if len(means) >= 2:
-            x_strain = mode == "strain_rate"
-            x = [100 * r["axial_strain"] for r in means] if x_strain else [r["platen_stress_Pa"] / 1e6 for r in means]
+            x, xlabel, word = progress_axis(means, mode)
             ax2.plot(x, [r["mean_sphericity"] for r in means], label="mean sphericity (Wadell)")
             ax2.plot(x, [r["mean_EI"] for r in means], label="mean EI")
             ax2.plot(x, [r["mean_FI"] for r in means], label="mean FI")
-            ax2.set_xlabel("axial strain (%)" if x_strain else "platen stress (MPa)")
+            ax2.set_xlabel(xlabel)
             ax2.set_ylabel("mean over grains (–)")
             ax2.set_ylim(0, 1.05)
             ax2.legend(loc="lower left")
-            ax2.set_title("means against " + ("strain" if x_strain else "stress"))
+            ax2.set_title("means against " + word)
         else:
             ax2.axis("off")
         fig.suptitle(f"{name}: grain shape")
