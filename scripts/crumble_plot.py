@@ -603,12 +603,15 @@ def plot_compare(F, d, title):
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     styles = ["-", "--", "-.", ":"]
 
-    def overlay(fname, ytitle, xy, xlog=False, xlabel="platen stress (MPa)", what=""):
+    def overlay(fname, ytitle, xy, xlog=False, xlabel="platen stress (MPa)", what="", points=False):
         fig, ax = plt.subplots(figsize=(7.2, 4.8))
         drawn = 0
         for i, (label, f, series, eff) in enumerate(data):
             x, y = xy(series)
-            if len(x) >= 2:
+            if len(x) >= 2 and points:  # samples that go back and forth: no connecting line
+                ax.plot(x, y, ls="none", marker="o", ms=2.5, alpha=0.7, color=colors[i % len(colors)], label=label)
+                drawn += 1
+            elif len(x) >= 2:
                 ax.plot(x, y, lw=1.5, color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], label=label)
                 drawn += 1
         if drawn == 0:
@@ -628,12 +631,12 @@ def plot_compare(F, d, title):
     def ncl(series):
         smax = max([r["platen_stress_Pa"] for r in series] + [0])
         pts = [(r["platen_stress_Pa"] / 1e6, r["void_ratio"]) for r in series
-               if r["platen_stress_Pa"] > 0.01 * smax and r["void_ratio"] > 0]
+               if r["platen_stress_Pa"] > 1e-3 * smax and r["void_ratio"] > 0]
         return [p[0] for p in pts], [p[1] for p in pts]
 
     if not scene:
         overlay("compare_ncl.png", "void ratio e (–)", ncl, xlog=True, xlabel="platen stress (MPa, log scale)",
-                what="normal compression lines")
+                what="normal compression lines", points=not all(monotonic_stress(s) for _, _, s, _ in data))
     if any(r["breakage_events"] > 0 for _, _, s, _ in data for r in s):
         if strain:
             overlay("compare_breakage.png", "grains in the engine",
