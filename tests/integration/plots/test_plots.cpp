@@ -145,7 +145,7 @@ TEST(Plots, ARunEndsWithItsFiguresUnlessOutputPlotsIsFalse) {
   ASSERT_EQ(off.status, 0) << off.output;
   EXPECT_FALSE(fs::exists(d / "ncl.png"));
   EXPECT_FALSE(fs::exists(d / "psd.png"));
-  EXPECT_EQ(off.output.find("plots"), std::string::npos) << off.output;
+  EXPECT_EQ(off.output.find("crumble: plots"), std::string::npos) << off.output;
   const auto bad = run_cli("validate " + scen + " --set output.plots=3");
   EXPECT_EQ(bad.status, 2) << bad.output;
   EXPECT_NE(bad.output.find("/output/plots"), std::string::npos) << bad.output;
