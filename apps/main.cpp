@@ -4,6 +4,7 @@
 //   crumble sweep SCENARIO --out DIR --param PATH --values a,b,c [...] [--reference V] [--metric NAME]...
 //   crumble validate SCENARIO [--set path=value]... [--print]
 //   crumble list [--options NAME [--markdown]]
+//   crumble plot DIR          (PNG figures of a run, compare or sweep folder)
 //   crumble shape --json SPEC --representation level_set|mesh|hull [--spacing h] [--nodes n]
 //   crumble bench engine|pd-kernel|lsdem ...
 //   crumble --plugin lib.so <subcommand> ...   (out-of-tree engines, models, builders)
@@ -27,6 +28,7 @@
 #include "scenarios/Compare.h"
 #include "scenarios/Sweep.h"
 #include "scenarios/OptionDocs.h"
+#include "scenarios/Plots.h"
 #include "scenarios/Plugins.h"
 #include "scenarios/Registry.h"
 #include "scenarios/RunPipeline.h"
@@ -59,9 +61,20 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   req.quiet = quiet;
   req.resume = resume;
   req.force = force;
+  req.plots = true;
   const RunResult r = run_pipeline(req);
   if (r.status == 1) std::cerr << "crumble: failed: " << r.reason << "\n";
   return r.status;
+}
+
+// The figures of a compare or sweep folder follow the scenario's output.plots (with --set applied).
+bool plots_wanted(const Json& scenario, const std::vector<std::string>& sets) {
+  RunRequest r;
+  r.scenario = scenario;
+  r.sets = sets;
+  const Json doc = request_document(r);
+  return !(doc.is_object() && doc.contains("output") && doc["output"].is_object() &&
+           doc["output"].contains("plots") && doc["output"]["plots"].is_boolean() && !doc["output"]["plots"].get<bool>());
 }
 
 // `crumble compare`: every combination of the --vary values from one packing (scenarios/Compare.h).
@@ -79,7 +92,9 @@ int cmd_compare(const std::string& file, const std::string& out, const std::vect
   req.jobs = jobs;
   req.quiet = quiet;
   req.force = force;
-  return run_compare(req);
+  const int status = run_compare(req);
+  if ((status == 0 || status == 1) && plots_wanted(req.scenario, req.sets)) plots_after(out, quiet);
+  return status;
 }
 
 // `crumble sweep`: settings of a few knobs against a reference, error and cost (scenarios/Sweep.h).
@@ -87,7 +102,21 @@ int cmd_sweep(const std::string& file, const std::string& out, SweepRequest req)
   req.scenario = load_scenario_file(file);
   req.source_name = file;
   req.out = out;
-  return run_sweep(req);
+  const int status = run_sweep(req);
+  if ((status == 0 || status == 1) && plots_wanted(req.scenario, req.sets)) plots_after(out, req.quiet);
+  return status;
+}
+
+// `crumble plot DIR`: the figures of an output folder, again or for the first time.
+int cmd_plot(const std::string& dir) {
+  const PlotOutcome o = make_plots(dir);
+  if (o.status == PlotOutcome::Status::Written) {
+    for (const auto& f : o.files) std::cout << f << "\n";
+    return 0;
+  }
+  std::cerr << "crumble: plot: " << (o.status == PlotOutcome::Status::Skipped ? "cannot plot: " : "") << o.message
+            << "\n";
+  return o.status == PlotOutcome::Status::BadInput ? 2 : 1;
 }
 
 int cmd_validate(const std::string& file, const std::vector<std::string>& sets, bool print) {
@@ -249,6 +278,13 @@ int main(int argc, char** argv) {
   shp->add_option("--spacing", spacing, "level-set grid spacing (m)");
   shp->add_option("--nodes", nodes, "level-set surface nodes");
 
+  std::string plot_dir;
+  auto* plt = app.add_subcommand("plot", "PNG figures of a run, compare or sweep output folder (python3-matplotlib)");
+  plt->add_option("dir", plot_dir, "output folder of crumble run, compare or sweep")->required();
+  plt->footer("Writes ncl.png, psd.png, breakage.png, ... into DIR, chosen by what DIR holds (README, \"Plots\"). "
+              "Exit status: 0 written; 2 DIR or one of its files cannot be read (the message names it); 1 no python3 "
+              "with matplotlib, or the plotting script failed.");
+
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON line on stdout)");
   bench->add_option("what", bench_what, "engine | pd-kernel | lsdem")->required();
   bench->add_option("--steps", bench_steps, "steps")->check(CLI::Range(1L, 100000000L));
@@ -274,6 +310,7 @@ int main(int argc, char** argv) {
     if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
     if (*swp) return cmd_sweep(file, out, sweep_req);
     if (*val) return cmd_validate(file, sets, print);
+    if (*plt) return cmd_plot(plot_dir);
     if (*lst) {
       if (list_markdown && list_options.empty()) throw InputError("list --markdown needs --options NAME");
       return list_options.empty() ? cmd_list() : cmd_list_options(list_options, list_markdown);

@@ -24,6 +24,7 @@
 #include <thread>
 
 #include "geometry/Format.h"
+#include "scenarios/Plots.h"
 #include "scenarios/RunPipeline.h"
 #include "scenarios/TableCells.h"
 #include "scenarios/Writers.h"
@@ -403,6 +404,8 @@ bool is_compare_output(const std::string& n) {
   for (const char* f : {"comparison.csv", "comparison.md", "packing.json", "sweep.csv", "pareto.md"})
     for (const char* sfx : {"", ".tmp"})
       if (n == std::string(f) + sfx) return true;
+  for (const auto& png : plot_file_names())
+    if (n == png || n == png + ".tmp") return true;
   return false;
 }
 

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "scenarios/Checkpoint.h"
+#include "scenarios/Plots.h"
 #include "scenarios/Tools.h"
 #include "scenarios/VtkWriter.h"
 #include "scenarios/Writers.h"
@@ -43,6 +44,8 @@ bool is_run_output(const std::string& name) {
         files.count(name.substr(0, name.size() - sfx.size())))
       return true;
   }
+  for (const auto& png : plot_file_names())
+    if (name == png || name == png + ".tmp") return true;
   return false;
 }
 bool is_vtk_output(const std::string& name) { return is_vtk_file_name(name); }  // scenarios/VtkWriter.h
@@ -291,6 +294,7 @@ RunResult execute(const RunRequest& req) {
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
               << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n";
   // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
+  if (req.plots && sc.output.plots) plots_after(out, req.quiet);
   if (sum.interrupted) {
     res.status = interrupted_status();
     res.reason = "interrupted at step " + std::to_string(sum.steps);

@@ -38,6 +38,9 @@ struct RunRequest {
   // Stop once the packing is built (settled) and out/packing.json written; summary.json then
   // holds only the packing stage's figures (`stage`: "packing").
   bool packing_only = false;
+  // PNG figures at the end (when the scenario's output.plots is true): `crumble run` sets it;
+  // the runs of `compare` and `sweep` leave it off, their folder gets the overlaid figures.
+  bool plots = false;
 };
 
 struct RunResult {

@@ -308,6 +308,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     sc.output.vtk_analyses = vo.boolean("vtk_analyses");
   }
   sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
+  sc.output.plots = oc.boolean("plots", true);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
   if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))
     oc.fail("checkpoint_every", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "

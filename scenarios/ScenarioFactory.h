@@ -21,6 +21,7 @@ struct OutputSettings {
   bool vtk_contacts = false;             // contact-force lines in each VTK snapshot
   bool vtk_analyses = false;             // per-point data of breakage analyses (vtk/analysis_*.vtp)
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
+  bool plots = true;                     // PNG figures at the end of `crumble run` (scenarios/Plots.h)
 };
 
 struct Scenario {

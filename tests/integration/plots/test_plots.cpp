@@ -1,0 +1,194 @@
+// The figures of an output folder (scenarios/Plots.h, scripts/crumble_plot.py): `crumble plot`
+// on a checked-in crushable run (data/zhu_zhao_quick_8MPa: the CSVs and JSON files of
+// oedometer_zhu_zhao_quick.json stopped with SIGINT at 8.56 MPa, 100 -> 235 grains, 105 breakage
+// events; no VTK files, so shape.png draws the means of shape.csv), the figures at the end of a tiny `crumble run`, a sweep
+// folder, and the messages when a CSV is missing or garbled or no matplotlib is there.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/CliRunner.h"
+
+namespace fs = std::filesystem;
+using crumble::testing_support::run_cli;
+using crumble::testing_support::slurp;
+
+namespace {
+
+// What the binary tries (scenarios/Plots.cpp): python3 on PATH, then /usr/bin/python3.
+bool have_matplotlib() {
+  for (const char* py : {"python3", "/usr/bin/python3"}) {
+    const std::string cmd = std::string(py) + " -c 'import matplotlib' >/dev/null 2>&1";
+    if (std::system(cmd.c_str()) == 0) return true;
+  }
+  return false;
+}
+
+#define SKIP_WITHOUT_MATPLOTLIB()                                                                            \
+  if (!have_matplotlib())                                                                                    \
+  GTEST_SKIP() << "no python3 that imports matplotlib (Debian: apt-get install python3-matplotlib); the "    \
+                  "figures cannot be drawn here"
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / "crumble_plots" / name;
+  fs::remove_all(d);
+  fs::create_directories(d.parent_path());
+  return d;
+}
+
+fs::path copy_fixture(const std::string& name) {
+  const fs::path d = fresh_dir(name);
+  fs::copy(fs::path(CRUMBLE_SOURCE_DIR) / "tests/integration/plots/data/zhu_zhao_quick_8MPa", d,
+           fs::copy_options::recursive);
+  return d;
+}
+
+// A PNG: the 8-byte signature, an IHDR chunk first, a plausible size in pixels, and more than
+// `min_bytes` (an empty figure at 110 dpi is ≈ 5 kB; one with curves, labels and a legend is more).
+void expect_png(const fs::path& p, std::uintmax_t min_bytes = 15000) {
+  ASSERT_TRUE(fs::exists(p)) << p;
+  const std::string s = slurp(p);
+  ASSERT_GT(s.size(), 33u) << p;
+  EXPECT_EQ(s.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
+  EXPECT_EQ(s.substr(12, 4), "IHDR") << p;
+  auto be32 = [&](std::size_t i) {
+    return (static_cast<std::uint32_t>(static_cast<unsigned char>(s[i])) << 24) |
+           (static_cast<std::uint32_t>(static_cast<unsigned char>(s[i + 1])) << 16) |
+           (static_cast<std::uint32_t>(static_cast<unsigned char>(s[i + 2])) << 8) |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(s[i + 3]));
+  };
+  EXPECT_GE(be32(16), 400u) << p << ": width";
+  EXPECT_GE(be32(20), 300u) << p << ": height";
+  EXPECT_GT(fs::file_size(p), min_bytes) << p;
+}
+
+}  // namespace
+
+TEST(Plots, PlotOfACrushableRunFolderDrawsItsFigures) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  const fs::path d = copy_fixture("crushable");
+  const auto r = run_cli("plot " + d.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* f : {"ncl.png", "psd.png", "breakage.png", "shape.png"}) {
+    expect_png(d / f);
+    EXPECT_NE(r.output.find(f), std::string::npos) << f << " not reported: " << r.output;
+  }
+  // A stress-controlled oedometer: no stress–strain or load–displacement figure.
+  EXPECT_FALSE(fs::exists(d / "stress_strain.png"));
+  EXPECT_FALSE(fs::exists(d / "load_displacement.png"));
+  for (const auto& e : fs::directory_iterator(d)) EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+}
+
+TEST(Plots, MissingOrGarbledCsvIsAnErrorNamingTheFile) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  {
+    const fs::path d = copy_fixture("no_series");
+    fs::remove(d / "series.csv");
+    const auto r = run_cli("plot " + d.string());
+    EXPECT_NE(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("series.csv"), std::string::npos) << r.output;
+  }
+  {
+    const fs::path d = copy_fixture("garbled_psd");
+    // Line 2's percent_passing_by_mass (the fourth field) becomes "12 %".
+    std::string psd = slurp(d / "psd.csv");
+    std::size_t at = psd.find('\n') + 1;
+    for (int k = 0; k < 3; ++k) at = psd.find(',', at) + 1;
+    psd.replace(at, psd.find(',', at) - at, "12 %");
+    std::ofstream(d / "psd.csv") << psd;
+    const auto r = run_cli("plot " + d.string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("psd.csv: line 2: column 'percent_passing_by_mass': '12 %' is not a number"),
+              std::string::npos)
+        << r.output;
+  }
+  {
+    const fs::path d = copy_fixture("short_header");
+    std::ofstream(d / "series.csv") << "time_s,step\n0,1\n";
+    const auto r = run_cli("plot " + d.string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("series.csv: no column 'platen_stress_Pa'"), std::string::npos) << r.output;
+  }
+  {
+    const fs::path d = fresh_dir("empty");
+    fs::create_directories(d);
+    const auto r = run_cli("plot " + d.string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("no crumble output"), std::string::npos) << r.output;
+    const auto n = run_cli("plot " + (d / "absent").string());
+    EXPECT_EQ(n.status, 2) << n.output;
+    EXPECT_NE(n.output.find("not a folder"), std::string::npos) << n.output;
+  }
+}
+
+// The tiny rigid run of Cli.SameSeedSameSummary: 25 spheres to 0.2 MPa.
+const char* kTinyRun =
+    " --threads 1 --set packing.count=25 --set container.lx=6e-3 --set container.ly=6e-3"
+    " --set loading.max_stress=2e5 --set loading.ramp_time=0.01 --set engine.solver_iterations=200";
+
+TEST(Plots, ARunEndsWithItsFiguresUnlessOutputPlotsIsFalse) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json";
+  const fs::path d = fresh_dir("run");
+  const auto r = run_cli("run " + scen + " --out " + d.string() + kTinyRun);
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_png(d / "ncl.png");
+  expect_png(d / "psd.png");
+  EXPECT_NE(r.output.find("crumble: plots: ncl.png, psd.png"), std::string::npos) << r.output;
+  // --force removes the earlier figures with the earlier run's files.
+  const auto off = run_cli("run " + scen + " --force --out " + d.string() + kTinyRun + " --set output.plots=false");
+  ASSERT_EQ(off.status, 0) << off.output;
+  EXPECT_FALSE(fs::exists(d / "ncl.png"));
+  EXPECT_FALSE(fs::exists(d / "psd.png"));
+  EXPECT_EQ(off.output.find("crumble: plots"), std::string::npos) << off.output;
+  const auto bad = run_cli("validate " + scen + " --set output.plots=3");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/output/plots"), std::string::npos) << bad.output;
+}
+
+TEST(Plots, WithoutMatplotlibTheRunWritesEveryCsvAndSaysSoInOneLine) {
+  // No matplotlib needed: the interpreter named does not exist.
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json";
+  const fs::path d = fresh_dir("no_python");
+  const std::string env = "CRUMBLE_PYTHON=/nonexistent/python3 ";
+  const std::string cmd = env + CRUMBLE_BINARY + " run " + scen + " --quiet --out " + d.string() + kTinyRun;
+  const auto r = run_cli("--version >/dev/null; " + cmd);
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* f : {"summary.json", "series.csv", "psd.csv", "ncl.csv", "events.csv"}) EXPECT_TRUE(fs::exists(d / f)) << f;
+  EXPECT_FALSE(fs::exists(d / "ncl.png"));
+  std::size_t lines = 0, at = 0;
+  while ((at = r.output.find("plots skipped", at)) != std::string::npos) ++lines, ++at;
+  EXPECT_EQ(lines, 1u) << r.output;
+  EXPECT_NE(r.output.find("python3-matplotlib"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("crumble plot " + d.string()), std::string::npos) << r.output;
+  const auto p = run_cli("--version >/dev/null; " + env + CRUMBLE_BINARY + " plot " + d.string());
+  EXPECT_EQ(p.status, 1) << p.output;
+  EXPECT_NE(p.output.find("no python3 with matplotlib"), std::string::npos) << p.output;
+  // A script that cannot be found: skipped the same way, naming the variable that points to it.
+  const auto s = run_cli("--version >/dev/null; CRUMBLE_PLOT_SCRIPT=/nonexistent/crumble_plot.py " +
+                         std::string(CRUMBLE_BINARY) + " plot " + d.string());
+  EXPECT_EQ(s.status, 1) << s.output;
+  EXPECT_NE(s.output.find("CRUMBLE_PLOT_SCRIPT"), std::string::npos) << s.output;
+}
+
+TEST(Plots, SweepFolderGetsTheErrorCostFront) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  const fs::path d = fresh_dir("sweep");
+  const auto r = run_cli("sweep " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/single_grain_pd.json --out " +
+                         d.string() + " --param breakage.spacing_fraction --values 0.2,0.17,0.15 --threads 1");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_png(d / "pareto.png");
+  EXPECT_NE(r.output.find("pareto.png"), std::string::npos) << r.output;
+  // Its runs are a compare folder's: their curves overlaid; no figures inside the run folders.
+  expect_png(d / "compare_psd.png");
+  for (const auto& e : fs::directory_iterator(d)) {
+    if (e.is_directory()) {
+      EXPECT_FALSE(fs::exists(e.path() / "psd.png")) << e.path();
+    }
+  }
+}
