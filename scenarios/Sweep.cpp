@@ -354,8 +354,10 @@ SweepRequest load_study(const std::string& study_file, const SweepRequest& cli, 
       const Json& vals = p.raw("values");
       if (!vals.is_array() || vals.empty()) p.fail("values", "expected a non-empty array of values, coarse to fine");
       std::string joined;
-      for (std::size_t i = 0; i < vals.size(); ++i)
-        joined += (i ? "," : "") + study_value(vals[i], p, "values/" + std::to_string(i));
+      for (std::size_t i = 0; i < vals.size(); ++i) {
+        if (i) joined += ',';
+        joined += study_value(vals[i], p, "values/" + std::to_string(i));
+      }
       req.params.push_back(path);
       req.values.push_back(joined);
       if (any_reference) {
