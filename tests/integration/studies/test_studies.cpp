@@ -233,3 +233,20 @@ TEST(Studies, ShippedLsdemStudyRunsFromTheCheckout) {
   }
   EXPECT_TRUE(fs::exists(out / "pareto.md"));
 }
+
+TEST(Studies, ListAndValidateShowTheFidelityPresets) {
+  const auto l = run_cli("list");
+  ASSERT_EQ(l.status, 0) << l.output;
+  EXPECT_NE(l.output.find("fidelity presets"), std::string::npos) << l.output;
+  for (const char* k : {"breakage.spacing_fraction", "engine.solver_iterations", "engine.dt_safety"})
+    EXPECT_NE(l.output.find(k), std::string::npos) << k;
+  const std::string sg = (kSource / "scenarios/single_grain_pd.json").string();
+  const auto ok = run_cli("validate " + sg + " --set fidelity=fast --print");
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_NE(ok.output.find("note: fidelity 'fast' sets breakage.spacing_fraction="), std::string::npos) << ok.output;
+  const auto bad = run_cli("validate " + sg + " --set fidelity=fastest");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/fidelity: unknown preset 'fastest'; expected one of: fast, balanced, accurate"),
+            std::string::npos)
+      << bad.output;
+}

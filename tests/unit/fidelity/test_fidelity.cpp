@@ -30,6 +30,7 @@ TEST(Fidelity, PresetSetsTheSelectedImplementationsKnobsOnly) {
     Json doc = single_grain();  // bullet + peridynamics + alpha_shape
     doc["fidelity"] = preset;
     doc["engine"].erase("solver_iterations");
+    doc.erase("schedule");
     const auto written = apply_fidelity(doc);
     std::set<std::string> expected;
     for (const auto& k : fidelity_knobs()) {
@@ -61,8 +62,10 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   const Scenario sc = build_scenario(doc, opt);
   EXPECT_EQ(sc.effective["breakage"]["spacing_fraction"].get<double>(), 0.07);
   EXPECT_EQ(sc.effective["breakage"]["density_scale"].get<double>(), 2.0);
-  // single_grain_pd gives solver_iterations itself: the preset leaves it.
+  // single_grain_pd gives solver_iterations and its breakage check interval itself: the preset
+  // leaves them.
   EXPECT_EQ(sc.effective["engine"]["solver_iterations"].get<int>(), 1000);
+  EXPECT_EQ(sc.effective["schedule"]["every_stress"].get<double>(), 0.1e6);
   // What the preset did is said: a note per value it wrote, none for the ones it left.
   for (const auto& n : sc.notes) {
     EXPECT_EQ(n.find("spacing_fraction"), std::string::npos) << n;
@@ -71,6 +74,7 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   // --set fidelity=... chooses the preset too; the preset fills what nothing else gives.
   Json plain = single_grain();
   plain["engine"].erase("solver_iterations");
+  plain.erase("schedule");
   BuildOptions set_preset;
   set_preset.overrides = {"fidelity=accurate"};
   const Scenario acc = build_scenario(plain, set_preset);
@@ -84,7 +88,7 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   EXPECT_EQ(acc.effective["fidelity"], "accurate");
   std::size_t notes = 0;
   for (const auto& n : acc.notes) notes += n.rfind("fidelity 'accurate' sets ", 0) == 0;
-  EXPECT_GE(notes, 3u);  // spacing, density scaling, iterations
+  EXPECT_GE(notes, 4u);  // spacing, density scaling, check interval, iterations
 }
 
 TEST(Fidelity, NoPresetChangesNothing) {
@@ -123,6 +127,7 @@ TEST(Fidelity, EveryPresetValueIsAcceptedByItsImplementation) {
         if (k.implementation != "lsdem") doc["engine"]["mass_scale"] = 70;
       }
       doc["fidelity"] = preset;
+      doc.erase("schedule");
       Scenario sc;
       ASSERT_NO_THROW(sc = build_scenario(doc, BuildOptions{}));
       std::string s = k.path;
