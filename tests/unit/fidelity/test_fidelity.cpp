@@ -22,6 +22,13 @@ const std::string kSource(CRUMBLE_SOURCE_DIR);
 
 Json single_grain() { return load_scenario_file(kSource + "/scenarios/single_grain_pd.json"); }
 
+// "engine.solver_iterations" -> /engine/solver_iterations
+Json::json_pointer pointer(const std::string& dotted) {
+  std::string s(1, '/');
+  for (char c : dotted) s.push_back(c == '.' ? '/' : c);
+  return Json::json_pointer(s);
+}
+
 }  // namespace
 
 TEST(Fidelity, PresetSetsTheSelectedImplementationsKnobsOnly) {
@@ -37,13 +44,7 @@ TEST(Fidelity, PresetSetsTheSelectedImplementationsKnobsOnly) {
       if (k.implementation != "bullet" && k.implementation != "peridynamics" && k.implementation != "alpha_shape") continue;
       expected.insert(k.path + "=" + fidelity_value(k, preset).dump());
       // The value is in the document at the knob's path.
-      const Json::json_pointer p("/" + [&] {
-        std::string s = k.path;
-        for (auto& c : s)
-          if (c == '.') c = '/';
-        return s;
-      }());
-      EXPECT_EQ(doc.at(p), fidelity_value(k, preset)) << k.path;
+      EXPECT_EQ(doc.at(pointer(k.path)), fidelity_value(k, preset)) << k.path;
     }
     ASSERT_FALSE(expected.empty());
     EXPECT_EQ(std::set<std::string>(written.begin(), written.end()), expected);
@@ -80,10 +81,7 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   const Scenario acc = build_scenario(plain, set_preset);
   for (const auto& k : fidelity_knobs()) {
     if (k.implementation != "peridynamics" && k.implementation != "bullet") continue;
-    std::string s = k.path;
-    for (auto& c : s)
-      if (c == '.') c = '/';
-    EXPECT_EQ(acc.effective.at(Json::json_pointer("/" + s)), k.accurate) << k.path;
+    EXPECT_EQ(acc.effective.at(pointer(k.path)), k.accurate) << k.path;
   }
   EXPECT_EQ(acc.effective["fidelity"], "accurate");
   std::size_t notes = 0;
@@ -130,10 +128,7 @@ TEST(Fidelity, EveryPresetValueIsAcceptedByItsImplementation) {
       doc.erase("schedule");
       Scenario sc;
       ASSERT_NO_THROW(sc = build_scenario(doc, BuildOptions{}));
-      std::string s = k.path;
-      for (auto& c : s)
-        if (c == '.') c = '/';
-      EXPECT_EQ(sc.effective.at(Json::json_pointer("/" + s)), fidelity_value(k, preset));
+      EXPECT_EQ(sc.effective.at(pointer(k.path)), fidelity_value(k, preset));
     }
   }
 }
