@@ -26,6 +26,7 @@
 #include "geometry/LevelSetGrid.h"
 #include "scenarios/Checkpoint.h"
 #include "scenarios/Compare.h"
+#include "scenarios/Fidelity.h"
 #include "scenarios/Sweep.h"
 #include "scenarios/OptionDocs.h"
 #include "scenarios/Plots.h"
@@ -98,9 +99,17 @@ int cmd_compare(const std::string& file, const std::string& out, const std::vect
 }
 
 // `crumble sweep`: settings of a few knobs against a reference, error and cost (scenarios/Sweep.h).
-int cmd_sweep(const std::string& file, const std::string& out, SweepRequest req) {
-  req.scenario = load_scenario_file(file);
-  req.source_name = file;
+// With --study FILE the scenario, params and metrics come from the study (studies/*.json).
+int cmd_sweep(const std::string& file, const std::string& out, SweepRequest req, const std::string& study,
+              bool jobs_given) {
+  if (!study.empty()) {
+    req = load_study(study, req, !file.empty(), jobs_given);
+  } else {
+    if (file.empty()) throw InputError("sweep: give a SCENARIO file, or --study FILE");
+    if (req.params.empty()) throw InputError("sweep: give --param PATH --values a,b,c (or --study FILE)");
+    req.scenario = load_scenario_file(file);
+    req.source_name = file;
+  }
   req.out = out;
   const int status = run_sweep(req);
   if ((status == 0 || status == 1) && plots_wanted(req.scenario, req.sets)) plots_after(out, req.quiet);
@@ -175,6 +184,7 @@ int cmd_list() {
   }
   const auto why = not_compiled_reason("fragment builder", "alpha_shape");
   if (!why.empty()) std::cout << "  (fragment builder alpha_shape not available: " << why << ")\n";
+  std::cout << fidelity_text();
   std::cout << "crumble list --options NAME: each option's type, default, range and meaning\n";
   return 0;
 }
@@ -236,12 +246,15 @@ int main(int argc, char** argv) {
   SweepRequest sweep_req;
   auto* swp = app.add_subcommand("sweep", "run a scenario at several settings of a knob, from one packing; error "
                                           "against a reference setting, cost, the error–cost front");
-  swp->add_option("scenario", file, "scenario JSON file")->required();
+  std::string study;
+  swp->add_option("scenario", file, "scenario JSON file (not with --study)");
+  swp->add_option("--study", study,
+                  "a study file (studies/*.json): the scenario, params, values, references and metrics of a sweep "
+                  "(docs/speed-accuracy.md)");
   swp->add_option("--out", out, "output directory (one folder per setting, sweep.csv, pareto.md, comparison.*)")
       ->required();
-  swp->add_option("--param", sweep_req.params, "scenario path to sweep (repeatable; each followed by --values)")
-      ->required();
-  swp->add_option("--values", sweep_req.values, "a,b,c: the values of the --param before it")->required();
+  swp->add_option("--param", sweep_req.params, "scenario path to sweep (repeatable; each followed by --values)");
+  swp->add_option("--values", sweep_req.values, "a,b,c: the values of the --param before it");
   swp->add_option("--reference", sweep_req.reference,
                   "the reference value of each --param, in order (default: the last value given, taken as the finest)");
   swp->add_option("--metric", sweep_req.metrics,
@@ -250,7 +263,7 @@ int main(int argc, char** argv) {
   swp->add_option("--seed", sweep_req.seed, "random seed (overrides the scenario's)");
   swp->add_option("--threads", sweep_req.threads, "threads of each run (overrides the scenario's)")
       ->check(CLI::Range(1, 1024));
-  swp->add_option("--jobs", sweep_req.jobs, "settings run at the same time (each a process; default 1)")
+  auto* swp_jobs = swp->add_option("--jobs", sweep_req.jobs, "settings run at the same time (each a process; default 1)")
       ->check(CLI::Range(1, 64));
   swp->add_flag("--quiet", sweep_req.quiet, "only errors on stderr");
   swp->add_flag("--force", sweep_req.force,
@@ -308,7 +321,7 @@ int main(int argc, char** argv) {
     for (const auto& p : plugins) load_plugin(p);
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
-    if (*swp) return cmd_sweep(file, out, sweep_req);
+    if (*swp) return cmd_sweep(file, out, sweep_req, study, swp_jobs->count() > 0);
     if (*val) return cmd_validate(file, sets, print);
     if (*plt) return cmd_plot(plot_dir);
     if (*lst) {

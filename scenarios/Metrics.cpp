@@ -1,5 +1,6 @@
 #include "scenarios/Metrics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -70,6 +71,44 @@ std::optional<double> first_breakage_stress(const RunOutputs& r, const std::stri
     }
   }
   return std::nullopt;
+}
+
+// The children's volumes of the first events.csv row that has children (child_volumes_m3,
+// ';'-separated): what a fragment builder made of the first fracture.
+std::vector<double> first_children_volumes(const RunOutputs& r) {
+  if (r.events.empty()) return {};
+  const auto& h = r.events[0];
+  const std::size_t ch = column(h, "children"), vol = column(h, "child_volumes_m3");
+  if (ch == h.size() || vol == h.size()) return {};
+  for (std::size_t i = 1; i < r.events.size(); ++i) {
+    const auto& row = r.events[i];
+    if (row.size() <= std::max(ch, vol) || !(std::atof(row[ch].c_str()) > 0)) continue;
+    std::vector<double> v;
+    std::size_t a = 0;
+    const std::string& cell = row[vol];
+    while (a <= cell.size()) {
+      const std::size_t b = std::min(cell.find(';', a), cell.size());
+      if (b > a) {
+        const double x = std::atof(cell.substr(a, b - a).c_str());
+        if (std::isfinite(x) && x > 0) v.push_back(x);
+      }
+      a = b + 1;
+    }
+    return v;
+  }
+  return {};
+}
+
+std::optional<double> largest_fragment_volume(const RunOutputs& r, const std::string&) {
+  const auto v = first_children_volumes(r);
+  if (v.empty()) return std::nullopt;
+  return *std::max_element(v.begin(), v.end());
+}
+
+std::optional<double> smallest_fragment_volume(const RunOutputs& r, const std::string&) {
+  const auto v = first_children_volumes(r);
+  if (v.empty()) return std::nullopt;
+  return *std::min_element(v.begin(), v.end());
 }
 
 // void_ratio_at_stress_<Pa>[_Pa] / void_ratio_at_strain_<value>: the level's value, or NaN
@@ -155,6 +194,10 @@ const std::vector<Metric>& metrics() {
       {"mean_circularity_final", "1", "2D: mean circularity of the final grains (Harmon et al. 2020 §5)",
        &from_summary<kCircularity>},
       {"mean_sphericity_final", "1", "3D: mean sphericity of the final grains", &from_summary<kSphericity>},
+      {"largest_fragment_volume", "m3",
+       "volume of the largest child of the first breakage (events.csv child_volumes_m3)", &largest_fragment_volume},
+      {"smallest_fragment_volume", "m3",
+       "volume of the smallest child of the first breakage (events.csv child_volumes_m3)", &smallest_fragment_volume},
       {"product_d50", "m", "jaw crusher: mass median sieve size of the product", &from_summary<kProductD50>},
       {"compression_index", "1", "C_c = -de/dlog10(stress) over the upper loading (e - log stress line)",
        &from_summary<kCompressionIndex>},

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "geometry/Format.h"
+#include "scenarios/Fidelity.h"
 #include "scenarios/InputChecks.h"
 #include "scenarios/Registry.h"
 #include "scenarios/VtkWriter.h"
@@ -142,7 +143,11 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   for (const auto& o : opt.overrides) apply_override(doc, o);
   if (!doc.is_object()) throw ConfigError(opt.source_name, "a scenario must be a JSON object");
   Scenario sc;
+  // The preset fills in knobs before anything reads the document, so the file's own values and
+  // --set (already applied) win over it.
+  for (const auto& w : apply_fidelity(doc)) sc.notes.push_back("fidelity '" + doc["fidelity"].get<std::string>() + "' sets " + w);
   Config root(doc);
+  if (root.has("fidelity")) root.accept("fidelity");
   sc.name = root.string("name", "scenario");
   root.string("description", "");
   const int dim = static_cast<int>(root.integer("dimension", 3, 2, 3));

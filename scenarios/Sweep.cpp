@@ -9,7 +9,9 @@
 #include <limits>
 #include <sstream>
 
+#include "core/Config.h"
 #include "scenarios/Compare.h"
+#include "scenarios/ScenarioFactory.h"
 #include "scenarios/Metrics.h"
 #include "scenarios/RunPipeline.h"
 #include "scenarios/TableCells.h"
@@ -278,6 +280,118 @@ int run_sweep(const SweepRequest& req) {
   if (!req.quiet) std::cerr << "crumble: sweep: " << n << " settings in " << fmt(total, 4) << " s; front in " << (dir / "pareto.md").string() << "\n";
   if (run.status != 0) return run.status;
   return ref_ok ? 0 : 1;
+}
+
+namespace {
+
+// A study's value as `--values` and `--set` take it: a string as is, anything else as JSON.
+std::string study_value(const Json& v, const Config& where, const std::string& key) {
+  if (v.is_string()) {
+    const auto& t = v.get_ref<const std::string&>();
+    if (t.empty() || t.find(',') != std::string::npos)
+      where.fail(key, "expected a non-empty value without commas (a string '" + t +
+                          "' would be split at its commas; give a number, a boolean, an object or an array)");
+    return t;
+  }
+  if (v.is_null()) where.fail(key, "expected a value (a number, string, boolean, object or array), not null");
+  return v.dump();
+}
+
+}  // namespace
+
+SweepRequest load_study(const std::string& study_file, const SweepRequest& cli, bool cli_has_scenario,
+                        bool cli_sets_jobs) {
+  if (cli_has_scenario)
+    throw InputError("sweep --study " + study_file + ": give the scenario in the study file (\"scenario\"), not on "
+                     "the command line");
+  if (!cli.params.empty() || !cli.values.empty() || !cli.reference.empty() || !cli.metrics.empty())
+    throw InputError("sweep --study " + study_file + ": --param, --values, --reference and --metric belong in the "
+                     "study file (\"params\", \"metrics\"); the command line may add --set, --seed, --threads, "
+                     "--jobs");
+  Json doc = load_scenario_file(study_file);  // any JSON file: errors name the file, line and column
+  SweepRequest req = cli;
+  std::string scenario_path;  // read after the study is checked: its errors name its own file
+  try {
+    if (!doc.is_object()) throw ConfigError("/", "a study must be a JSON object (docs/speed-accuracy.md)");
+    Config st(doc);
+    st.string("study");
+    st.string("description", "");
+    // The scenario: a file next to the study, or the scenario itself.
+    if (!st.has("scenario")) st.fail("scenario", "missing: a scenario file name (relative to the study) or an object");
+    const Json& sc = st.raw("scenario");
+    if (sc.is_string()) {
+      const fs::path f = fs::path(sc.get<std::string>());
+      const fs::path resolved = f.is_absolute() ? f : fs::path(study_file).parent_path() / f;
+      std::error_code ec;
+      if (!fs::is_regular_file(resolved, ec))
+        st.fail("scenario", "no scenario file '" + resolved.string() + "' (a name is relative to the study's folder)");
+      scenario_path = resolved.lexically_normal().string();
+    } else if (sc.is_object()) {
+      req.scenario = sc;
+      req.source_name = study_file + "#/scenario";
+    } else {
+      st.fail("scenario", "expected a scenario file name or a scenario object");
+    }
+    if (st.has("set")) {
+      const Json& sets = st.raw("set");
+      if (!sets.is_array()) st.fail("set", "expected an array of \"path=value\" strings");
+      std::vector<std::string> fixed;
+      for (std::size_t i = 0; i < sets.size(); ++i) {
+        if (!sets[i].is_string() || sets[i].get<std::string>().find('=') == std::string::npos)
+          st.fail("set/" + std::to_string(i), "expected a string \"path=value\" (e.g. \"breakage.spacing_fraction=0.08\")");
+        fixed.push_back(sets[i].get<std::string>());
+      }
+      req.sets.insert(req.sets.begin(), fixed.begin(), fixed.end());  // the command line's --set come after
+    }
+    auto params = st.children("params");
+    if (params.empty()) st.fail("params", "expected at least one {\"path\": ..., \"values\": [...]}");
+    bool any_reference = false;
+    for (auto& p : params) any_reference = any_reference || p.has("reference");
+    for (auto& p : params) {
+      const std::string path = p.string("path");
+      if (path.empty() || path.find('=') != std::string::npos)
+        p.fail("path", "expected a scenario path such as breakage.spacing_fraction");
+      const Json& vals = p.raw("values");
+      if (!vals.is_array() || vals.empty()) p.fail("values", "expected a non-empty array of values, coarse to fine");
+      std::string joined;
+      for (std::size_t i = 0; i < vals.size(); ++i) {
+        if (i) joined += ',';
+        joined += study_value(vals[i], p, "values/" + std::to_string(i));
+      }
+      req.params.push_back(path);
+      req.values.push_back(joined);
+      if (any_reference) {
+        // One reference per param (the last value where one is not given).
+        req.reference.push_back(p.has("reference") ? study_value(p.raw("reference"), p, "reference")
+                                                   : study_value(vals.back(), p, "values"));
+      }
+    }
+    if (st.has("metrics")) {
+      const Json& ms = st.raw("metrics");
+      if (!ms.is_array()) st.fail("metrics", "expected an array of metric names (docs/sweep.md)");
+      for (std::size_t i = 0; i < ms.size(); ++i) {
+        if (!ms[i].is_string()) st.fail("metrics/" + std::to_string(i), "expected a metric name");
+        find_metric(ms[i].get<std::string>(), study_file + ": /metrics/" + std::to_string(i));
+        req.metrics.push_back(ms[i].get<std::string>());
+      }
+    }
+    if (st.has("threads") && !cli.threads) req.threads = static_cast<int>(st.integer("threads", 1, 1, 1024));
+    else if (st.has("threads")) st.accept("threads");
+    if (st.has("seed") && !cli.seed) req.seed = st.unsigned_integer("seed", 1);
+    else if (st.has("seed")) st.accept("seed");
+    if (st.has("jobs") && !cli_sets_jobs) req.jobs = static_cast<int>(st.integer("jobs", 1, 1, 64));
+    else if (st.has("jobs")) st.accept("jobs");
+    st.check_unknown();
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    const std::string prefix = e.path() + ": ";
+    throw ConfigError(study_file, e.path(), what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+  }
+  if (!scenario_path.empty()) {
+    req.scenario = load_scenario_file(scenario_path);
+    req.source_name = scenario_path;
+  }
+  return req;
 }
 
 }  // namespace crumble

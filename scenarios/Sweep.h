@@ -41,4 +41,20 @@ std::vector<bool> pareto_front(const std::vector<double>& cost, const std::vecto
 // reference setting failed (no errors can be computed; the tables still say so).
 int run_sweep(const SweepRequest& req);
 
+// A study file (studies/*.json, docs/speed-accuracy.md): one sweep written down, so it can be
+// run again as it was measured. An object with
+//   "study": name, "description": text (optional),
+//   "scenario": a scenario file name (relative to the study file's folder) or an inline scenario,
+//   "set": ["path=value", ...] (optional, fixed for every setting),
+//   "params": [{"path": "breakage.spacing_fraction", "values": [0.1, 0.062], "reference": 0.062}, ...]
+//             (values: numbers, strings without commas, booleans, objects or arrays; reference
+//             optional, default the last value),
+//   "metrics": ["crushing_force", ...] (optional), "threads", "seed", "jobs" (optional).
+// Returns the request `crumble sweep --study FILE` runs: the study's fields, then those of
+// `cli` (its sets appended; its threads, seed and jobs when given). Throws ConfigError naming
+// the file and the JSON path on a malformed study, and InputError when `cli` also gives a
+// scenario, --param, --values, --reference or --metric (they belong in the study).
+SweepRequest load_study(const std::string& study_file, const SweepRequest& cli, bool cli_has_scenario,
+                        bool cli_sets_jobs);
+
 }  // namespace crumble
