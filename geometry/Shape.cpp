@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "geometry/BuildCounters.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/MeshDistance.h"
@@ -434,6 +435,7 @@ bool Shape::contains(const Vec3& p) const {
 const TriMesh& Shape::mesh() const {
   if (dimension_ != 3) throw std::logic_error("mesh() asked of a 2D shape; use outline()");
   std::call_once(mesh_once_, [this] {
+    count_built(Representation::Mesh);
     const int level = std::max(0, res_.mesh_subdivisions);
     switch (kind_) {
       case ShapeKind::Sphere: {
@@ -468,6 +470,7 @@ const TriMesh& Shape::convex_hull() const {
 const std::vector<Vec3>& Shape::outline() const {
   if (dimension_ != 2) throw std::logic_error("outline() asked of a 3D shape; use mesh()");
   std::call_once(outline_once_, [this] {
+    count_built(Representation::Outline);
     const int n = 16 << std::max(0, res_.mesh_subdivisions);
     switch (kind_) {
       case ShapeKind::Disk: outline_ = superellipse_outline(params_[0], params_[0], 1.0, n); break;
@@ -500,6 +503,7 @@ std::shared_ptr<const LevelSetGrid> Shape::level_set_ptr() const {
     // reads penetration = −φ, so their grids are reinitialised to true distances.
     opt.exact_distance = !(kind_ == ShapeKind::Ellipsoid || kind_ == ShapeKind::Superellipsoid ||
                            kind_ == ShapeKind::Ellipse || kind_ == ShapeKind::Superellipse);
+    count_built(Representation::LevelSetGrid);
     ls_ = LevelSetGrid::sample(dimension_, bounds_, h, [this](const Vec3& p) { return signed_distance(p); }, opt);
   });
   return ls_;
