@@ -434,6 +434,8 @@ bool Shape::contains(const Vec3& p) const {
 
 const TriMesh& Shape::mesh() const {
   if (dimension_ != 3) throw std::logic_error("mesh() asked of a 2D shape; use outline()");
+  // A polyhedron is its mesh: no second copy (every alpha-shape and plane-cut child is one).
+  if (kind_ == ShapeKind::Polyhedron) return source_mesh_;
   std::call_once(mesh_once_, [this] {
     count_built(Representation::Mesh);
     const int level = std::max(0, res_.mesh_subdivisions);
@@ -454,7 +456,6 @@ const TriMesh& Shape::mesh() const {
         mesh_ = superellipsoid_mesh({params_[0], params_[1], params_[2]}, params_[3], params_[4], level);
         break;
       case ShapeKind::Box: mesh_ = box_mesh({params_[0], params_[1], params_[2]}); break;
-      case ShapeKind::Polyhedron: mesh_ = source_mesh_; break;
       case ShapeKind::LevelSet: mesh_ = source_grid_->to_mesh(); break;
       default: break;
     }
