@@ -4,6 +4,7 @@
 // hull vertices that are not extreme (a point in the middle of a face or an edge that was
 // picked before the corners around it) and rebuilds from the extreme points only.
 #include "geometry/ConvexHull.h"
+#include "geometry/BuildCounters.h"
 #include "geometry/Format.h"
 
 #include <algorithm>
@@ -331,6 +332,7 @@ TriMesh convex_hull(const std::vector<Vec3>& points) {
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!is_finite(points[i]))
       throw std::invalid_argument("convex_hull: point " + std::to_string(i) + " is not finite");
+  count_built(Representation::ConvexHull);
 
   std::vector<int> use(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) use[i] = static_cast<int>(i);

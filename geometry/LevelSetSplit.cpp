@@ -1,5 +1,7 @@
 #include "geometry/LevelSetSplit.h"
 
+#include "geometry/BuildCounters.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -66,6 +68,7 @@ SplitPiece measure(std::shared_ptr<const LevelSetGrid> g) {
 
 SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int regions, const RegionFill& fill,
                           const RegionFn& beyond, const SplitOptions& o, const NodeFn* custom_nodes) {
+  count_built(Representation::LevelSetSplit);
   const Lattice L = lattice_of(W);
   const std::size_t N = L.size();
   const int nz = L.n[2];

@@ -11,6 +11,7 @@
 // Everything is built in the constructor; queries only read, so concurrent const calls
 // are safe.
 #include "geometry/MeshDistance.h"
+#include "geometry/BuildCounters.h"
 
 #include <algorithm>
 #include <array>
@@ -168,6 +169,7 @@ struct MeshDistance::Impl {
 
 MeshDistance::MeshDistance(const TriMesh& mesh) : impl_(std::make_unique<Impl>()) {
   if (mesh.triangles.empty()) throw std::invalid_argument("MeshDistance: the mesh has no triangles");
+  count_built(Representation::MeshDistance);
   const int nv = static_cast<int>(mesh.vertices.size());
   for (const auto& v : mesh.vertices)
     if (!is_finite(v)) throw std::invalid_argument("MeshDistance: the mesh has a non-finite vertex");

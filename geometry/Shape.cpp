@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "geometry/BuildCounters.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/MeshDistance.h"
@@ -433,7 +434,10 @@ bool Shape::contains(const Vec3& p) const {
 
 const TriMesh& Shape::mesh() const {
   if (dimension_ != 3) throw std::logic_error("mesh() asked of a 2D shape; use outline()");
+  // A polyhedron is its mesh: no second copy (every alpha-shape and plane-cut child is one).
+  if (kind_ == ShapeKind::Polyhedron) return source_mesh_;
   std::call_once(mesh_once_, [this] {
+    count_built(Representation::Mesh);
     const int level = std::max(0, res_.mesh_subdivisions);
     switch (kind_) {
       case ShapeKind::Sphere: {
@@ -452,7 +456,6 @@ const TriMesh& Shape::mesh() const {
         mesh_ = superellipsoid_mesh({params_[0], params_[1], params_[2]}, params_[3], params_[4], level);
         break;
       case ShapeKind::Box: mesh_ = box_mesh({params_[0], params_[1], params_[2]}); break;
-      case ShapeKind::Polyhedron: mesh_ = source_mesh_; break;
       case ShapeKind::LevelSet: mesh_ = source_grid_->to_mesh(); break;
       default: break;
     }
@@ -468,6 +471,7 @@ const TriMesh& Shape::convex_hull() const {
 const std::vector<Vec3>& Shape::outline() const {
   if (dimension_ != 2) throw std::logic_error("outline() asked of a 3D shape; use mesh()");
   std::call_once(outline_once_, [this] {
+    count_built(Representation::Outline);
     const int n = 16 << std::max(0, res_.mesh_subdivisions);
     switch (kind_) {
       case ShapeKind::Disk: outline_ = superellipse_outline(params_[0], params_[0], 1.0, n); break;
@@ -500,6 +504,7 @@ std::shared_ptr<const LevelSetGrid> Shape::level_set_ptr() const {
     // reads penetration = −φ, so their grids are reinitialised to true distances.
     opt.exact_distance = !(kind_ == ShapeKind::Ellipsoid || kind_ == ShapeKind::Superellipsoid ||
                            kind_ == ShapeKind::Ellipse || kind_ == ShapeKind::Superellipse);
+    count_built(Representation::LevelSetGrid);
     ls_ = LevelSetGrid::sample(dimension_, bounds_, h, [this](const Vec3& p) { return signed_distance(p); }, opt);
   });
   return ls_;

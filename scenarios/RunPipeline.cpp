@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "geometry/BuildCounters.h"
 #include "scenarios/Checkpoint.h"
 #include "scenarios/Plots.h"
 #include "scenarios/Tools.h"
@@ -188,8 +189,25 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// summary.json `representations_built`: what this run built, by kind (geometry/BuildCounters.h),
+// and the same as one line for the end of the run.
+Json representations_json(const RepresentationCounts& built) {
+  Json j = Json::object();
+  for (std::size_t i = 0; i < kRepresentationKinds; ++i) j[to_string(static_cast<Representation>(i))] = built.n[i];
+  return j;
+}
+std::string representations_line(const RepresentationCounts& built) {
+  std::string s;
+  for (std::size_t i = 0; i < kRepresentationKinds; ++i)
+    if (built.n[i] != 0)
+      s += (s.empty() ? "" : ", ") + std::to_string(built.n[i]) + " " + to_string(static_cast<Representation>(i));
+  return s.empty() ? "none" : s;
+}
+
 RunResult execute(const RunRequest& req) {
   const std::string& out = req.out;
+  // Everything this run builds counts, the scenario's shapes and packing included.
+  const RepresentationCounts built_before = representations_built();
   Scenario sc = build_request(req);
   for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
   if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
@@ -258,6 +276,7 @@ RunResult execute(const RunRequest& req) {
     j["packing_settle_steps"] = static_cast<double>(settle_steps);
     j["packing_settled"] = packing_settled ? 1.0 : 0.0;
     j["packing_hash"] = packing_hash;
+    j["representations_built"] = representations_json(representations_built() - built_before);
     j["wall_seconds"] = seconds_since(t0);
     write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
     res.summary = j;
@@ -285,6 +304,8 @@ RunResult execute(const RunRequest& req) {
   sum.wall_seconds = seconds_since(t0);
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
+  const RepresentationCounts built = representations_built() - built_before;
+  j["representations_built"] = representations_json(built);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
   res.summary = j;
   if (sum.interrupted)
@@ -292,7 +313,8 @@ RunResult execute(const RunRequest& req) {
               << (sc.output.checkpoint_every > 0 ? ", resume with --resume\n" : "\n");
   if (!req.quiet)
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
-              << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n";
+              << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n"
+              << "crumble: representations built: " << representations_line(built) << "\n";
   // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
   if (req.plots && sc.output.plots) plots_after(out, req.quiet);
   if (sum.interrupted) {

@@ -12,6 +12,7 @@
 #include "breakage/peridynamics/PdLattice.h"
 #include "breakage/peridynamics/PdSystem.h"
 #include "core/Weibull.h"
+#include "geometry/BuildCounters.h"
 
 namespace crumble {
 
@@ -171,6 +172,7 @@ Lattice grain_lattice(const Shape& shape, const PdOptions& o, double d_e, const 
   double V = 0;
   if (o.volume_correction && !pts.empty()) V = shape.volume() / static_cast<double>(pts.size());
   if (pts.empty()) return Lattice{};
+  count_built(Representation::PdLattice);
   return pd::build_lattice(pts, h, o.horizon_factor, o.partial_volumes, V);
 }
 

@@ -5,12 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <type_traits>
 #include <utility>
 
+#include "geometry/BuildCounters.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/MeshClip.h"
 
@@ -155,6 +157,8 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
     const double d_est = diameter_of_volume(parent.volume() * material[c].size() / n_total);
     TriMesh mesh;
     bool have = false;
+    // The hull of the boundary points, once: the convexity test and the hull child share it.
+    std::optional<TriMesh> boundary_hull;
     if (d_est < opt_.hull_diameter) {
       r.method = "convex_hull";
       r.note = "d_e " + fmt_num(d_est) + " m < convex_hull_diameter";
@@ -165,12 +169,14 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
         if (!pc.fracture_points.empty())
           input.insert(input.end(), pc.fracture_points[c].begin(), pc.fracture_points[c].end());
       }
+      count_built(Representation::AlphaShape);
       const AlphaShapeResult a = alpha_shape_polyhedron(input, aopt);
       r.alpha = a.alpha;
       r.alpha_steps = a.steps;
       if (a.ok) {
         try {
-          const double v_hull = polyhedron_mass_properties(convex_hull(boundary[c])).volume;
+          boundary_hull = convex_hull(boundary[c]);
+          const double v_hull = polyhedron_mass_properties(*boundary_hull).volume;
           r.convexity = polyhedron_mass_properties(a.mesh).volume / v_hull;
         } catch (const std::invalid_argument&) {
           r.convexity = 1;  // cannot happen for a closed alpha shape; treat as convex
@@ -193,7 +199,10 @@ FragmentResult AlphaShapeBuilder::from_clusters(const Shape& parent, const Point
     }
     if (!have) {
       try {
-        mesh = convex_hull(boundary[c].size() >= 4 ? boundary[c] : material[c]);
+        if (boundary_hull && boundary[c].size() >= 4)
+          mesh = std::move(*boundary_hull);
+        else
+          mesh = convex_hull(boundary[c].size() >= 4 ? boundary[c] : material[c]);
       } catch (const std::invalid_argument& e) {
         // Flat or tiny cluster: hull of the points' lattice cells.
         std::vector<Vec3> pts = material[c];
@@ -228,6 +237,7 @@ FragmentResult AlphaShapeBuilder::from_planes(const Shape& parent, const Cutting
   out.method = "plane_cut";
   std::vector<TriMesh> pieces;
   try {
+    count_built(Representation::MeshClip);
     pieces = split_by_planes(parent.mesh(), planes);
   } catch (const std::exception&) {
     // The parent's mesh cannot be cut (an alpha-shape child that CGAL finds
@@ -236,6 +246,7 @@ FragmentResult AlphaShapeBuilder::from_planes(const Shape& parent, const Cutting
     ++out.fallbacks;
     out.method = "plane_cut_hull";
     try {
+      count_built(Representation::MeshClip);
       pieces = split_by_planes(parent.convex_hull(), planes);
     } catch (const std::exception&) {
       out.method = "no_split";  // nothing can be cut: the grain stays whole

@@ -9,6 +9,12 @@
 // is run without editing this file. Each run prints one row of the table
 //   cross | dim | engine | model | builder | events | grains | mass error
 // (ctest -L cross -V, or the test binary itself).
+//
+// Each run also checks that it built only what its scene needs (issue 10 §3; summary.json
+// `representations_built`, geometry/BuildCounters.h): no level set on a Bullet/ODE run unless
+// the level_set builder cuts a broken grain, no alpha shape or mesh clip on an lsdem run unless
+// the alpha_shape builder is chosen, and a peridynamics lattice only for a grain that passed
+// screening (never more lattices than analyses).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -69,6 +75,38 @@ bool model_is_active(const std::string& name, int dim) {
   return breakage_models().find(name, "/breakage/type").make(cfg, ctx)->active();
 }
 
+// The representations a run of `t` may build, against what summary.json says it built.
+void expect_only_needed_representations(const Triple& t, const nlohmann::json& s) {
+  ASSERT_TRUE(s.contains("representations_built") && s["representations_built"].is_object()) << s.dump(1);
+  const auto& b = s["representations_built"];
+  auto built = [&](const char* kind) {
+    EXPECT_TRUE(b.contains(kind) && b[kind].is_number_integer()) << kind << " missing in " << b.dump();
+    return b.value(kind, -1L);
+  };
+  const long analyses = s["analyses"].get<long>();
+  const std::string what = t.engine + " + " + t.model + " + " + t.builder + ": " + b.dump();
+  // A lattice per analysed grain at most; none for a grain that never passed screening.
+  EXPECT_LE(built("pd_lattices"), t.model == "peridynamics" ? analyses : 0L) << what;
+  EXPECT_GE(built("pd_lattices"), 0) << what;
+  // Rigid-body engines collide hulls/spheres: a level set only for a grain the level_set
+  // builder cuts (its children carry their own grids).
+  const bool rigid_engine = t.engine == "bullet" || t.engine == "ode";
+  if (rigid_engine) {
+    EXPECT_LE(built("level_set_grids"), t.builder == "level_set" ? analyses : 0L) << what;
+  }
+  // Alpha shapes and mesh clipping belong to the alpha_shape builder, and to broken grains.
+  if (t.builder != "alpha_shape") {
+    EXPECT_EQ(built("alpha_shapes"), 0) << what;
+    EXPECT_EQ(built("meshes_clipped"), 0) << what;
+  }
+  if (t.builder != "level_set") {
+    EXPECT_EQ(built("level_set_splits"), 0) << what;
+  }
+  if (analyses == 0) {
+    EXPECT_EQ(built("alpha_shapes") + built("meshes_clipped") + built("level_set_splits"), 0) << what;
+  }
+}
+
 class Cross : public ::testing::TestWithParam<Triple> {};
 
 TEST_P(Cross, RunsBreaksAndKeepsTheMassBudget) {
@@ -96,6 +134,7 @@ TEST_P(Cross, RunsBreaksAndKeepsTheMassBudget) {
             << error << "\n";
   EXPECT_GT(m0, 0);
   EXPECT_LE(error, 1e-9) << "initial " << m0 << ", final " << m1 << ", removed " << mr;
+  expect_only_needed_representations(t, s);
   if (model_is_active(t.model, t.dimension)) {
     EXPECT_GT(events, 0) << "an active model breaks no grain of the crushable packing\n" << r.output;
     EXPECT_GT(s["grains_final"].get<long>() + (mr > 0 ? 1 : 0), s["grains_initial"].get<long>());
@@ -103,6 +142,58 @@ TEST_P(Cross, RunsBreaksAndKeepsTheMassBudget) {
     EXPECT_EQ(events, 0);
     EXPECT_EQ(s["grains_final"], s["grains_initial"]);
   }
+}
+
+// Zhu & Zhao 2019 §3.1 analyse only grains whose largest contact force passes the screening
+// threshold: a grain below it is never discretised. The same tiny packing on Bullet, once as
+// the cross product runs it (lattices built, at most one per analysis) and once with a
+// threshold no contact reaches (no analysis, no lattice).
+TEST(CrossRepresentations, AGrainBelowTheScreeningThresholdIsNeverDiscretised) {
+  const std::string scenario = std::string(CRUMBLE_SOURCE_DIR) + "/tests/integration/cross/cross_3d.json";
+  auto run = [&](const std::string& tag, const std::string& extra) {
+    const fs::path out = fs::temp_directory_path() / "crumble_cross" / tag;
+    fs::remove_all(out);
+    const std::string args = plugin_args() + " run " + scenario + " --out " + out.string() +
+                             " --quiet --threads 1 --set engine.type=bullet --set breakage.type=peridynamics"
+                             " --set fragments.type=alpha_shape" +
+                             break_profile().at("peridynamics") + extra;
+    const CliResult r = run_cli(args);
+    EXPECT_EQ(r.status, 0) << args << "\n" << r.output;
+    return nlohmann::json::parse(slurp(out / "summary.json"));
+  };
+  // No stop after the first breakages: the screened run must load as long as the other one.
+  const nlohmann::json screened =
+      run("screened_out", " --set breakage.threshold_force_ref=1e9 --set simulation.stop_after_breakage_events=0");
+  EXPECT_EQ(screened["analyses"].get<long>(), 0) << screened.dump(1);
+  EXPECT_EQ(screened["representations_built"]["pd_lattices"].get<long>(), 0) << screened.dump(1);
+  EXPECT_GT(screened["max_platen_stress_Pa"].get<double>(), 1e6) << "the packing was not loaded";
+  const nlohmann::json analysed = run("analysed", "");
+  const long lattices = analysed["representations_built"]["pd_lattices"].get<long>();
+  EXPECT_GT(lattices, 0) << analysed.dump(1);
+  EXPECT_LE(lattices, analysed["analyses"].get<long>()) << analysed.dump(1);
+}
+
+// DESIGN.md "Grains and shapes": an LS-DEM run never builds a convex hull. With no output
+// that draws the grains (shape.csv's sphericity and the VTK files need a surface mesh), a 3D
+// lsdem run builds one level set per distinct shape and nothing else.
+TEST(CrossRepresentations, AnLsdemRunBuildsOnlyLevelSets) {
+  const std::string scenario = std::string(CRUMBLE_SOURCE_DIR) + "/tests/integration/cross/cross_3d.json";
+  const fs::path out = fs::temp_directory_path() / "crumble_cross" / "lsdem_level_sets_only";
+  fs::remove_all(out);
+  const std::string args = plugin_args() + " run " + scenario + " --out " + out.string() +
+                           " --quiet --threads 1 --set engine.type=lsdem --set breakage.type=none"
+                           " --set output.shape_metrics=false --set output.vtk_final=false";
+  const CliResult r = run_cli(args);
+  ASSERT_EQ(r.status, 0) << args << "\n" << r.output;
+  const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
+  const auto& b = s["representations_built"];
+  const long grains = s["grains_initial"].get<long>();
+  EXPECT_GE(b["level_set_grids"].get<long>(), 1) << b.dump();
+  EXPECT_LE(b["level_set_grids"].get<long>(), grains) << b.dump();
+  long others = 0;
+  for (auto it = b.begin(); it != b.end(); ++it)
+    if (it.key() != "level_set_grids") others += it.value().get<long>();
+  EXPECT_EQ(others, 0) << b.dump();
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Cross, ::testing::ValuesIn(triples()), [](const auto& info) {
