@@ -11,6 +11,9 @@
 
 namespace crumble {
 
+// output.checkpoint_every_s when the scenario does not say (s of wall time).
+inline constexpr double kDefaultCheckpointSeconds = 300;
+
 struct OutputSettings {
   long series_every = 0;                 // steps between series rows (0 = simulation.sample_every)
   std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
@@ -19,6 +22,7 @@ struct OutputSettings {
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
+  double checkpoint_every_s = 0;         // wall-time seconds between checkpoint.json writes (0 = none)
 };
 
 struct Scenario {
