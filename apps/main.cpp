@@ -215,10 +215,12 @@ int main(int argc, char** argv) {
   run->add_option("--set", sets, "override a scenario value: path=value (e.g. engine.type=lsdem)");
   run->add_option("--seed", seed, "random seed (overrides the scenario's)");
   run->add_option("--threads", threads, "threads (overrides the scenario's)")->check(CLI::Range(1, 1024));
-  run->add_flag("--quiet", quiet, "no progress on stderr");
+  run->add_flag("--quiet", quiet,
+                "no progress on stderr (otherwise a line with an ETA every 2 s on a terminal, every 60 s in a log)");
   run->add_flag("--resume", resume,
-                "continue from DIR/checkpoint.json (written when output.checkpoint_every > 0); the effective scenario "
-                "must equal DIR/effective_scenario.json but for threads and simulation.max_steps");
+                "continue from DIR/checkpoint.json (written every output.checkpoint_every_s seconds, default 300, "
+                "and every output.checkpoint_every steps), also after SIGKILL; the effective scenario must equal "
+                "DIR/effective_scenario.json but for threads, simulation.max_steps and output.checkpoint_every_s");
   run->add_flag("--force", force,
                 "use a non-empty --out folder: first remove the earlier run's files there (only crumble's own)");
   run->footer(kExitStatus);

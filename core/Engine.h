@@ -4,8 +4,11 @@
 // needs them. Units are SI; an engine that prefers other units scales internally.
 #pragma once
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "core/Contact.h"
 #include "core/Grain.h"
@@ -91,6 +94,23 @@ class Engine {
   virtual void set_moving_wall(int index, const WallKinematics& k);
   // Total force (N; 2D: N/m) the grains exert on the wall.
   virtual Vec3 moving_wall_force(int index) const;
+
+  // Checkpoints (scenarios/Checkpoint.h): the engine's own state beyond what the grain
+  // records carry (contact history, velocities at half steps, exact orientations, the
+  // platen's motion and the forces last measured), so that a resumed run continues the
+  // uninterrupted one bit for bit. save_state() fills `out` with a JSON object whose
+  // doubles round-trip exactly and returns true; an engine that cannot returns false (the
+  // default) and a resume rebuilds it from the grains alone. restore_state() is called on
+  // an engine holding the checkpoint's grains and container, with what save_state() wrote;
+  // it throws std::invalid_argument naming what does not fit.
+  virtual bool save_state(nlohmann::json& out) const {
+    (void)out;
+    return false;
+  }
+  virtual void restore_state(const nlohmann::json& state) {
+    (void)state;
+    throw std::invalid_argument("engine '" + name() + "' cannot restore a saved engine state");
+  }
 };
 
 }  // namespace crumble

@@ -100,6 +100,8 @@ SimulationState Simulation::saved_state() const {
   s.energy_in = energy_in_;
   s.reference_diameter = reference_diameter_;
   s.small_grain_overlaps = guard_max_.small_grain_overlaps;
+  s.guard_max_overlap_fraction = guard_max_.max_overlap_fraction;
+  s.guard_max_energy_ratio = guard_max_.energy_ratio;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -133,6 +135,8 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   energy_in_ = st.energy_in;
   reference_diameter_ = st.reference_diameter;
   guard_max_.small_grain_overlaps = st.small_grain_overlaps;
+  guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
+  guard_max_.energy_ratio = st.guard_max_energy_ratio;
   resumed_from_ = st;
   resumed_ = true;
 }

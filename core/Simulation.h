@@ -53,6 +53,7 @@ struct SimulationState {
   double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
   double reference_diameter = 0;  // m: mean diameter of the initial grains (guards)
   long small_grain_overlaps = 0;
+  double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
 };
 
 class Simulation {

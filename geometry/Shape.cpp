@@ -544,6 +544,37 @@ Shape::Ptr Shape::scaled(double f) const {
   return nullptr;
 }
 
+Shape::Ptr Shape::restored(const Shape& r, const MassProperties& mass, const Aabb& bounds, const Vec3& recentring,
+                           std::vector<Vec3> polygon, TriMesh mesh) {
+  if (!(mass.volume > 0) || !std::isfinite(mass.volume) ||
+      !(std::abs(mass.volume - r.mass_.volume) <= 1e-9 * r.mass_.volume))
+    throw std::invalid_argument("saved volume " + std::to_string(mass.volume) + " does not match the shape's " +
+                                std::to_string(r.mass_.volume));
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(mass.inertia(i, k))) throw std::invalid_argument("saved inertia is not finite");
+  if (!is_finite(bounds.lo) || !is_finite(bounds.hi) || !is_finite(recentring))
+    throw std::invalid_argument("saved bounds or recentring are not finite");
+  auto s = std::shared_ptr<Shape>(new Shape());
+  s->kind_ = r.kind_;
+  s->dimension_ = r.dimension_;
+  s->res_ = r.res_;
+  s->params_ = r.params_;
+  s->recentring_ = recentring;
+  s->mass_ = mass;
+  s->bounds_ = bounds;
+  s->source_mesh_ = r.kind_ == ShapeKind::Polyhedron && !mesh.vertices.empty() ? std::move(mesh) : r.source_mesh_;
+  if (r.kind_ == ShapeKind::Polygon && !polygon.empty()) {
+    if (polygon.size() != r.source_polygon_.size()) throw std::invalid_argument("saved polygon does not match the shape");
+    s->source_polygon_ = std::move(polygon);
+  } else {
+    s->source_polygon_ = r.source_polygon_;
+  }
+  s->source_grid_ = r.source_grid_;
+  if (r.kind_ == ShapeKind::LevelSet) s->ls_ = s->source_grid_;
+  return finish(s);
+}
+
 std::string Shape::describe() const {
   std::ostringstream os;
   os << to_string(kind_) << "(";

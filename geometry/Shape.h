@@ -92,6 +92,16 @@ class Shape {
   // The same shape uniformly scaled about its centroid (children's volume correction).
   Ptr scaled(double factor) const;
 
+  // A shape as a checkpoint saved it, bit for bit: `rebuilt` is the shape made again from
+  // the saved (centred) source, whose factory recomputed the mass properties and may have
+  // moved the source by a rounding-sized re-centring; the result has rebuilt's kind,
+  // parameters and grid, the saved polygon vertices or mesh (when given: Polygon,
+  // Polyhedron) and the saved mass properties, bounds and recentring, so a resumed run
+  // computes with the same numbers as the run that saved it. Throws std::invalid_argument
+  // when the saved figures do not belong to the rebuilt shape (volume off by > 1e-9).
+  static Ptr restored(const Shape& rebuilt, const MassProperties& mass, const Aabb& bounds, const Vec3& recentring,
+                      std::vector<Vec3> polygon = {}, TriMesh mesh = {});
+
   std::string describe() const;
 
   Shape(const Shape&) = delete;

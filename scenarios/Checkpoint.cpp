@@ -52,7 +52,7 @@ Json shape_to_json(const Shape& s) {
   return j;
 }
 
-Json checkpoint_json(Simulation& sim, const std::string& scenario) {
+Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& run_info) {
   sim.sync_grains();
   const SimulationState st = sim.saved_state();
   Json j;
@@ -78,7 +78,9 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
                 {"grains_initial", st.grains_initial},
                 {"mass_initial", st.mass_initial},
                 {"void_ratio_initial", st.void_ratio_initial},
-                {"max_platen_stress", st.max_platen_stress}};
+                {"max_platen_stress", st.max_platen_stress},
+                {"guard_max_overlap_fraction", st.guard_max_overlap_fraction},
+                {"guard_max_energy_ratio", st.guard_max_energy_ratio}};
   // Shared shapes are written once.
   std::map<const Shape*, std::size_t> index;
   Json shapes = Json::array(), grains = Json::array();
@@ -86,7 +88,20 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
     auto it = index.find(g.shape.get());
     if (it == index.end()) {
       it = index.emplace(g.shape.get(), shapes.size()).first;
-      shapes.push_back(shape_to_json(*g.shape));
+      Json sj = shape_to_json(*g.shape);
+      // What the factories would compute again from the (centred) source, as the run had
+      // it: rebuilding recomputes the mass properties from centred vertices and differs in
+      // the last bits, which a bit-identical resume cannot afford (Shape::restored).
+      const MassProperties& mp = g.shape->mass_properties();
+      Json I = Json::array();
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) I.push_back(mp.inertia(a, b));
+      const Aabb bb = g.shape->bounds();
+      sj["saved"] = {{"volume", mp.volume},
+                     {"inertia", I},
+                     {"bounds", {bb.lo.x, bb.lo.y, bb.lo.z, bb.hi.x, bb.hi.y, bb.hi.z}},
+                     {"recentring", vec(g.shape->recentring())}};
+      shapes.push_back(std::move(sj));
     }
     grains.push_back({{"id", g.id},
                       {"parent", g.parent},
@@ -103,12 +118,15 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario) {
   }
   j["shapes"] = shapes;
   j["grains"] = grains;
+  Json es;
+  if (sim.engine().save_state(es)) j["engine_state"] = std::move(es);
+  if (run_info.is_object() && !run_info.empty()) j["run"] = run_info;
   return j;
 }
 
 Checkpoint read_checkpoint(const std::string& path, const std::string& scenario, int dim) {
   std::ifstream in(path);
-  if (!in) throw ConfigError(path, "cannot open checkpoint (a run writes one when output.checkpoint_every > 0)");
+  if (!in) throw ConfigError(path, "cannot open checkpoint (a run writes one when output.checkpoint_every or output.checkpoint_every_s is > 0)");
   std::stringstream ss;
   ss << in.rdbuf();
   Json doc = parse_json_text(ss.str(), path);
@@ -141,8 +159,41 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.mass_initial = s.number("mass_initial", 0, 0);
   st.void_ratio_initial = s.number("void_ratio_initial", 0);
   st.max_platen_stress = s.number("max_platen_stress", 0);
+  st.guard_max_overlap_fraction = s.number("guard_max_overlap_fraction", 0, 0);
+  st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   std::vector<Shape::Ptr> shapes;
-  for (auto& sc : c.children("shapes")) shapes.push_back(shape_from_config(sc, dim));
+  for (auto& sc : c.children("shapes")) {
+    Shape::Ptr sh = shape_from_config(sc, dim);
+    if (sc.has("saved")) {
+      const Config sv = sc.child("saved");
+      MassProperties mp;
+      mp.volume = sv.positive("volume");
+      const auto I = sv.numbers("inertia");
+      if (I.size() != 9) sv.fail("inertia", "expected the 9 components of the inertia tensor, row by row");
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) mp.inertia(a, b) = I[3 * a + b];
+      const auto B = sv.numbers("bounds");
+      if (B.size() != 6) sv.fail("bounds", "expected [lo x, lo y, lo z, hi x, hi y, hi z]");
+      const Aabb bounds{{B[0], B[1], B[2]}, {B[3], B[4], B[5]}};
+      const Vec3 rc = sv.vec3("recentring", {});
+      // The saved source as written (already checked by shape_from_config).
+      std::vector<Vec3> poly;
+      TriMesh mesh;
+      const Json& d = sc.doc();
+      if (sh->kind() == ShapeKind::Polygon)
+        for (const auto& v : d.at("vertices")) poly.push_back({v[0].get<double>(), v[1].get<double>(), 0.0});
+      if (sh->kind() == ShapeKind::Polyhedron && d.contains("vertices") && d.contains("triangles")) {
+        for (const auto& v : d.at("vertices")) mesh.vertices.push_back({v[0].get<double>(), v[1].get<double>(), v[2].get<double>()});
+        for (const auto& t : d.at("triangles")) mesh.triangles.push_back({t[0].get<int>(), t[1].get<int>(), t[2].get<int>()});
+      }
+      try {
+        sh = Shape::restored(*sh, mp, bounds, rc, std::move(poly), std::move(mesh));
+      } catch (const std::invalid_argument& e) {
+        sv.fail("volume", e.what());
+      }
+    }
+    shapes.push_back(std::move(sh));
+  }
   for (auto& gc : c.children("grains")) {
     Grain g;
     g.id = gc.integer("id", 0, 0);
@@ -170,19 +221,50 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
     g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
     cp.grains.push_back(std::move(g));
   }
+  if (c.has("engine_state")) cp.engine_state = c.raw("engine_state");
+  if (c.has("run")) {
+    cp.run_info = c.raw("run");
+    if (!cp.run_info.is_object()) c.fail("run", "expected an object");
+  }
   c.check_unknown();
   return cp;
 }
 
-void CheckpointWriter::on_sample(const Simulation& sim, const RunState& s) {
-  if (every_ <= 0 || s.step - last_ < every_) return;
-  last_ = s.step;
-  write_file_atomic(dir_ + "/checkpoint.json", checkpoint_json(const_cast<Simulation&>(sim), scenario_).dump() + "\n");
+void restore_engine_state(Engine& engine, const Checkpoint& cp, const std::string& path) {
+  if (cp.engine_state.is_null()) return;
+  try {
+    engine.restore_state(cp.engine_state);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(path, "/engine_state", e.what());
+  }
 }
 
-void CheckpointWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
-  if (every_ <= 0) return;
-  write_file_atomic(dir_ + "/checkpoint.json", checkpoint_json(const_cast<Simulation&>(sim), scenario_).dump() + "\n");
+CheckpointWriter::CheckpointWriter(std::string dir, std::string scenario, long every, double every_s, Json run_info)
+    : dir_(std::move(dir)), scenario_(std::move(scenario)), every_(every), every_s_(every_s), info_(std::move(run_info)) {}
+
+void CheckpointWriter::on_start(const Simulation&, const RunState& s) {
+  last_ = s.step;
+  last_time_ = std::chrono::steady_clock::now();
+}
+
+void CheckpointWriter::write(const Simulation& sim) {
+  write_file_atomic(dir_ + "/checkpoint.json",
+                    checkpoint_json(const_cast<Simulation&>(sim), scenario_, info_).dump() + "\n");
+  last_time_ = std::chrono::steady_clock::now();
+}
+
+void CheckpointWriter::on_sample(const Simulation& sim, const RunState& s) {
+  const bool by_steps = every_ > 0 && s.step - last_ >= every_;
+  const bool by_time =
+      every_s_ > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - last_time_).count() >= every_s_;
+  if (!by_steps && !by_time) return;
+  if (by_steps) last_ = s.step;  // wall-time writes leave the step schedule as it was
+  write(sim);
+}
+
+void CheckpointWriter::on_finish(const Simulation& sim, const RunState&, RunSummary&) {
+  if (every_ <= 0 && every_s_ <= 0) return;
+  write(sim);
 }
 
 }  // namespace crumble

@@ -1,8 +1,12 @@
 // Checkpoints of long runs (checkpoint.json in the output directory) and resuming from them
-// (`crumble run SCENARIO --out DIR --resume`). A checkpoint holds the loop's state and every
-// grain (shape, pose, velocities, strength, lineage); the engine is rebuilt from it, so
-// contact history and solver warm starts begin afresh at the resume point.
+// (`crumble run SCENARIO --out DIR --resume`). A checkpoint holds the loop's state, every
+// grain (shape, pose, velocities, strength, lineage) and, when the engine can save it
+// (Engine::save_state: lsdem), the engine's own state (contact history, half-step
+// velocities, platen motion), so that a resumed lsdem run is bit-identical to an
+// uninterrupted one. Other engines are rebuilt from the grains: their contact history and
+// solver warm starts begin afresh at the resume point (docs/scenarios.md, output).
 #pragma once
+#include <chrono>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -16,28 +20,43 @@ namespace crumble {
 // level-set grid with its surface nodes).
 nlohmann::json shape_to_json(const Shape& s);
 
-nlohmann::json checkpoint_json(Simulation& sim, const std::string& scenario_name);
+// `run_info`: the run pipeline's own figures, stored as "run" (omitted when empty).
+nlohmann::json checkpoint_json(Simulation& sim, const std::string& scenario_name,
+                               const nlohmann::json& run_info = nlohmann::json::object());
 
 struct Checkpoint {
   SimulationState state;
   std::vector<Grain> grains;
+  nlohmann::json engine_state;  // null when the engine saved none
+  nlohmann::json run_info = nlohmann::json::object();  // checkpoint_json's run_info
 };
+// Restores the engine part of a checkpoint into an engine holding its grains; errors name
+// `path`/engine_state (ConfigError). Does nothing for a checkpoint without one.
+void restore_engine_state(Engine& engine, const Checkpoint& cp, const std::string& path);
 // Reads DIR/checkpoint.json; errors name the file and what is wrong.
 Checkpoint read_checkpoint(const std::string& path, const std::string& scenario_name, int dimension);
 
-// Writes checkpoint.json every `every` steps (atomically) and at the end of the run.
+// Writes checkpoint.json (atomically: temporary file + rename) at the first series sample
+// `every` steps or `every_s` seconds of wall time after the last one (0 = not by that
+// measure), and at the end of the run. Attach it after the CSV writers: they flush a
+// sample's rows before it runs, so a run killed at any moment leaves CSV rows up to (at
+// least) the checkpoint's step and a resume keeps exactly those.
 class CheckpointWriter : public Observer {
  public:
-  CheckpointWriter(std::string dir, std::string scenario, long every)
-      : dir_(std::move(dir)), scenario_(std::move(scenario)), every_(every) {}
-  void on_start(const Simulation& sim, const RunState& s) override { last_ = s.step; }
+  CheckpointWriter(std::string dir, std::string scenario, long every, double every_s = 0,
+                   nlohmann::json run_info = nlohmann::json::object());
+  void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
 
  private:
+  void write(const Simulation& sim);
   std::string dir_, scenario_;
   long every_;
+  double every_s_;
+  nlohmann::json info_;
   long last_ = 0;
+  std::chrono::steady_clock::time_point last_time_;
 };
 
 }  // namespace crumble

@@ -12,9 +12,12 @@
 #include <set>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "geometry/BuildCounters.h"
 #include "scenarios/Checkpoint.h"
 #include "scenarios/Plots.h"
+#include "scenarios/Progress.h"
 #include "scenarios/Tools.h"
 #include "scenarios/VtkWriter.h"
 #include "scenarios/Writers.h"
@@ -133,13 +136,15 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 
 // Keys that may differ between a run and its resumption: the thread count (results do not
 // depend on it) and simulation.max_steps (raising it is how a run stopped by it continues).
-const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps"};
+// The wall-time checkpoint interval neither changes results nor existed before it was
+// declared, so effective scenarios of earlier runs lack it.
+const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps", "/output/checkpoint_every_s"};
 
 void check_resumable(const std::string& out, const Json& effective) {
   const fs::path dir(out);
   if (!fs::exists(dir / "checkpoint.json"))
     throw InputError("--out " + out + " --resume: no checkpoint.json to resume from (a run writes one when "
-                     "output.checkpoint_every > 0)");
+                     "output.checkpoint_every or output.checkpoint_every_s is > 0)");
   std::ifstream in(dir / "effective_scenario.json");
   if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
   std::stringstream ss;
@@ -158,7 +163,7 @@ void check_resumable(const std::string& out, const Json& effective) {
   throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
                    ", now " + show(effective) +
                    "); a resumed run must use the same effective scenario (only /threads and "
-                   "/simulation/max_steps may change). Use the same file and --set options, or start a new run "
+                   "/simulation/max_steps and /output/checkpoint_every_s may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 
@@ -231,6 +236,7 @@ RunResult execute(const RunRequest& req) {
   const auto t0 = std::chrono::steady_clock::now();
   long settle_steps = 0, resumed_step = -1;
   bool packing_settled = true;
+  Json run_info = Json::object();
   if (req.resume) {
     // Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
     Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
@@ -239,6 +245,11 @@ RunResult execute(const RunRequest& req) {
     sim.set_container(c);
     resumed_step = cp.state.step;
     sim.resume(cp.state, std::move(cp.grains));
+    restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
+    // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
+    run_info = cp.run_info;
+    if (run_info.contains("packing_settle_steps") && run_info["packing_settle_steps"].is_number())
+      settle_before = run_info["packing_settle_steps"].get<double>();
     if (!req.quiet)
       std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
                 << sim.grains().size() << " grains)\n";
@@ -285,12 +296,22 @@ RunResult execute(const RunRequest& req) {
     return res;
   }
 
-  attach_standard_observers(sc, out);
+  if (!req.resume) run_info = {{"packing_settle_steps", settle_steps}, {"packing_settled", packing_settled}};
+  attach_standard_observers(sc, out, run_info);
   sim.set_stop_flag(&g_stop);
   const auto t_loading = std::chrono::steady_clock::now();
+  // A progress line every few seconds on a terminal; in a log (stderr not a terminal: a
+  // batch job, a test) one a minute, so long runs still show where they are without
+  // flooding the log. --quiet: none.
+  const double every = req.progress_every_s > 0 ? req.progress_every_s : (isatty(STDERR_FILENO) ? 2.0 : 60.0);
+  EtaEstimator eta;
+  double last_line = 0;
   auto progress = [&](const RunState& s, double f) {
-    if (req.quiet) return;
-    std::cerr << format_progress(s, f, seconds_since(t_loading)) << "\n";
+    const double el = seconds_since(t_loading);
+    eta.add(el, f);
+    if (req.quiet || el - last_line < every) return;
+    last_line = el;
+    std::cerr << "crumble: " << format_progress(s, f, el, eta.eta_s()) << "\n";
   };
   RunSummary sum = sim.run(progress);
   // A resumed run settled nothing: report the settling of the run it continues.
@@ -299,6 +320,8 @@ RunResult execute(const RunRequest& req) {
     sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
   } else if (settle_before >= 0) {
     sum.extra["packing_settle_steps"] = settle_before;
+    if (run_info.contains("packing_settled") && run_info["packing_settled"].is_boolean())
+      sum.extra["packing_settled"] = run_info["packing_settled"].get<bool>() ? 1.0 : 0.0;
   }
   if (req.resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
   sum.wall_seconds = seconds_since(t0);
@@ -310,7 +333,7 @@ RunResult execute(const RunRequest& req) {
   res.summary = j;
   if (sum.interrupted)
     std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
-              << (sc.output.checkpoint_every > 0 ? ", resume with --resume\n" : "\n");
+              << (sc.output.checkpoint_every > 0 || sc.output.checkpoint_every_s > 0 ? ", resume with --resume\n" : "\n");
   if (!req.quiet)
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
               << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n"

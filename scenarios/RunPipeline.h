@@ -31,6 +31,9 @@ struct RunRequest {
   bool force = false;   // a non-empty `out`: remove the earlier run's files (only crumble's own) first
   bool resume = false;  // continue from out/checkpoint.json
   bool quiet = false;   // no progress lines on stderr
+  // Seconds of wall time between progress lines; 0: every 2 s when stderr is a terminal,
+  // every 60 s otherwise (a log).
+  double progress_every_s = 0;
   // Start from this packing.json instead of the scenario's packing: the "packing" section is
   // replaced by {"type": "file", "path": packing_file} after `sets` (scenarios with a "scene"
   // build their own packing and keep it).

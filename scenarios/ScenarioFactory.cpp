@@ -318,6 +318,15 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))
     oc.fail("checkpoint_every", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
                                 "for scenarios with walls or a jaw_crusher scene");
+  {
+    // Checkpoints by wall time, on by default (a run killed after hours loses minutes);
+    // scenes that cannot be checkpointed default to off and refuse a value.
+    const bool open_scene = !sc.packing.walls.empty() || sc.packing.feed.count > 0;
+    sc.output.checkpoint_every_s = oc.number("checkpoint_every_s", open_scene ? 0.0 : kDefaultCheckpointSeconds, 0.0);
+    if (open_scene && sc.output.checkpoint_every_s > 0)
+      oc.fail("checkpoint_every_s", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
+                                    "for scenarios with walls or a jaw_crusher scene");
+  }
 
 
   root.check_unknown();

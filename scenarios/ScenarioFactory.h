@@ -11,6 +11,9 @@
 
 namespace crumble {
 
+// output.checkpoint_every_s when the scenario does not say (s of wall time).
+inline constexpr double kDefaultCheckpointSeconds = 300;
+
 struct OutputSettings {
   long series_every = 0;                 // steps between series rows (0 = simulation.sample_every)
   std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
@@ -22,6 +25,7 @@ struct OutputSettings {
   bool vtk_analyses = false;             // per-point data of breakage analyses (vtk/analysis_*.vtp)
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
   bool plots = true;                     // PNG figures at the end of `crumble run` (scenarios/Plots.h)
+  double checkpoint_every_s = 0;         // wall-time seconds between checkpoint.json writes (0 = none)
 };
 
 struct Scenario {

@@ -234,7 +234,7 @@ double perimeter(const std::vector<Vec3>& poly) {
 
 }  // namespace
 
-void attach_standard_observers(Scenario& sc, const std::string& out) {
+void attach_standard_observers(Scenario& sc, const std::string& out, const Json& checkpoint_info) {
   Simulation& sim = *sc.sim;
   const bool resumed = sim.resumed();
   const SimulationState st = sim.saved_state();
@@ -244,7 +244,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
   const double resume_strain =
       resumed && st.initial_height > 0 ? (st.initial_height - st.platen_position) / st.initial_height : -1.0;
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0,
-                                               sc.output.psd_at_strain, resume_strain));
+                                               sc.output.psd_at_strain, resume_strain, resumed ? st.step : -1L));
   if (sc.output.shape_metrics)
     sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
@@ -266,8 +266,10 @@ void attach_standard_observers(Scenario& sc, const std::string& out) {
       fines_size = std::max(fines_size, e["simulation"]["fines_diameter"].get<double>());
     sim.add_observer(std::make_shared<ReportRecorder>(out, sc.output.psd_at_stress, sc.output.psd_at_strain, fines_size));
   }
-  if (sc.output.checkpoint_every > 0)
-    sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every));
+  // Last of the writers: every row of a checkpointed step is on disk before the checkpoint.
+  if (sc.output.checkpoint_every > 0 || sc.output.checkpoint_every_s > 0)
+    sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every,
+                                                        sc.output.checkpoint_every_s, checkpoint_info));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>(out));
   if (sim.container().open) sim.add_observer(std::make_shared<ProductWriter>(out, sc.packing.scene_figures));
 }

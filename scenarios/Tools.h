@@ -10,7 +10,10 @@ namespace crumble {
 
 // series.csv, events.csv, breakage_per_mpa.csv, psd.csv, VTK, and for single-grain scenes
 // the crushing figures in summary.json.
-void attach_standard_observers(Scenario& sc, const std::string& out_dir);
+// `checkpoint_info` goes into every checkpoint.json as "run" (what the run pipeline needs on
+// resume, e.g. the packing's settling figures) and comes back in Checkpoint::run_info.
+void attach_standard_observers(Scenario& sc, const std::string& out_dir,
+                               const nlohmann::json& checkpoint_info = nlohmann::json::object());
 
 // `crumble shape`: volume, centroid, inertia, surface area (2D perimeter), grid, nodes of a
 // shape under one representation.

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -241,21 +242,40 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
 }
 
 PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress,
-                     std::vector<double> strain_levels, double resume_strain)
+                     std::vector<double> strain_levels, double resume_strain, long resume_step)
     : dir_(dir), levels_(std::move(levels)), strains_(std::move(strain_levels)) {
   std::sort(levels_.begin(), levels_.end());
   std::sort(strains_.begin(), strains_.end());
-  if (resume_stress < 0) return;
+  if (resume_stress < 0 && resume_step < 0) return;
   // Keep the earlier tables (but its final one) and the sieves they used.
   resumed_ = true;
   const auto rows = read_csv(dir_ + "/psd.csv");
+  int step_col = -1;
+  if (!rows.empty())
+    for (std::size_t c = 0; c < rows[0].size(); ++c)
+      if (rows[0][c] == "step") step_col = static_cast<int>(c);
+  std::set<std::string> kept;
   for (std::size_t i = 1; i < rows.size(); ++i) {
     // The end-of-run tables ("final" and levels not reached) belong to the earlier run's end.
     if (rows[i].size() < 4 || rows[i][0] == "final" || rows[i][0].find("_not_reached") != std::string::npos) continue;
+    // A table written after the checkpoint (by a run killed later) is written again by the
+    // resumed run: kept by the step of its sample, as the CSV streams keep their rows.
+    if (resume_step >= 0 && step_col >= 0 &&
+        (static_cast<int>(rows[i].size()) <= step_col || std::atol(rows[i][step_col].c_str()) > resume_step))
+      continue;
+    kept.insert(rows[i][0]);
     for (std::size_t k = 0; k < rows[i].size(); ++k) rows_ += (k ? "," : "") + rows[i][k];
     rows_ += '\n';
     d_max_ = std::max(d_max_, std::atof(rows[i][2].c_str()));
   }
+  if (resume_step >= 0 && step_col >= 0) {
+    // Levels are tabled in ascending order: the kept tables say which are done.
+    while (next_ < levels_.size() && kept.count("level_" + fmt_num(levels_[next_]))) ++next_;
+    while (next_strain_ < strains_.size() && kept.count("strain_" + fmt_num(strains_[next_strain_]))) ++next_strain_;
+    return;
+  }
+  // A psd.csv without steps (written before they were recorded): by the stress and strain
+  // reached at the checkpoint.
   while (next_ < levels_.size() && levels_[next_] <= resume_stress) ++next_;
   while (next_strain_ < strains_.size() && strains_[next_strain_] <= resume_strain) ++next_strain_;
 }
@@ -264,11 +284,12 @@ void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
   if (resumed_ && d_max_ > 0) return;
   for (const auto& g : sim.grains()) d_max_ = std::max(d_max_, g.shape->equivalent_diameter());
   table(sim, s, "initial");
+  write();  // on disk before any checkpoint, so a run killed early resumes with it
 }
 
 void PsdWriter::write() const {
   write_file_atomic(dir_ + "/psd.csv",
-                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain\n" + rows_);
+                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain,step\n" + rows_);
 }
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
@@ -305,8 +326,11 @@ void PsdWriter::table(const Simulation& sim, const RunState& s, const std::strin
   const std::vector<double> pass = percent_passing(sizes, masses, sieves);
   std::ostringstream os;
   os << std::setprecision(10);
+  // The sieve with every digit: a resumed run takes d_max from the first sieve of the kept
+  // tables and must find the same sieves.
   for (std::size_t k = 0; k < sieves.size(); ++k)
-    os << label << ',' << s.platen_stress << ',' << sieves[k] << ',' << pass[k] << ',' << s.axial_strain << '\n';
+    os << label << ',' << s.platen_stress << ',' << std::setprecision(17) << sieves[k] << std::setprecision(10) << ','
+       << pass[k] << ',' << s.axial_strain << ',' << s.step << '\n';
   rows_ += os.str();
 }
 
@@ -386,16 +410,6 @@ void ShapeWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum)
   }
 }
 
-std::string format_progress(const RunState& s, double fraction, double elapsed) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(1) << "[" << 100 * fraction << "%] t=" << std::setprecision(5) << s.time
-     << " s step " << s.step << " stress " << std::setprecision(3) << s.platen_stress / 1e6 << " MPa, "
-     << s.grains << " grains, " << s.breakage_events << " breakages";
-  if (fraction > 1e-3) {
-    const double eta = elapsed * (1 - fraction) / fraction;
-    os << ", ETA " << std::setprecision(0) << eta << " s";
-  }
-  return os.str();
 }
 
 Json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,

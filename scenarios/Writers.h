@@ -82,12 +82,14 @@ class EventsWriter : public Observer {
 
 // psd.csv: particle size distribution by mass (removed fines counted in the finest bin)
 // when the platen stress first reaches each requested level (`level_<Pa>`), when the axial
-// strain first reaches each requested strain (`strain_<value>`), and at the end.
+// strain first reaches each requested strain (`strain_<value>`), and at the end. Every row
+// carries the step of the sample its table was taken at.
 class PsdWriter : public Observer {
  public:
-  // resume_stress >= 0: keep the tables of the earlier run up to that stress (and strain).
+  // A resumed run (resume_step >= 0) keeps the earlier run's tables taken at or before that
+  // step; a psd.csv without a step column is kept up to resume_stress (and resume_strain).
   PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress = -1,
-            std::vector<double> strain_levels = {}, double resume_strain = -1);
+            std::vector<double> strain_levels = {}, double resume_strain = -1, long resume_step = -1);
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
@@ -137,9 +139,6 @@ class ShapeWriter : public Observer {
 
 // Rows of a CSV file (header first), split at commas; empty when the file is missing.
 std::vector<std::vector<std::string>> read_csv(const std::string& path);
-
-// Progress with ETA on stderr.
-std::string format_progress(const RunState& s, double fraction, double elapsed_s);
 
 nlohmann::json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,
                             const std::string& breakage, const std::string& fragments, std::uint64_t seed,

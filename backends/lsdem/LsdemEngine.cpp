@@ -9,6 +9,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "core/Rng.h"
 
 namespace crumble {
@@ -819,6 +821,153 @@ void LsdemEngine::integrate(double dt) {
     M = platen_mass(container_, M, s_.mass_scale);
     platen_.advance(dt, platen_force_, M, s_.global_damping);
   }
+}
+
+// ---- Checkpoint state ----
+
+bool LsdemEngine::save_state(nlohmann::json& out) const {
+  using J = nlohmann::json;
+  if (!walls_kin_.empty()) return false;
+  // nlohmann writes the shortest decimal that reads back to the same double, so every
+  // value below round-trips bit for bit.
+  J bodies = J::array();
+  for (const auto& b : bodies_)
+    bodies.push_back(J::array({b.id, b.x.x, b.x.y, b.x.z, b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z, b.q.w, b.q.x,
+                               b.q.y, b.q.z, b.moved, b.turned}));
+  std::vector<const std::pair<const std::pair<GrainId, GrainId>, PairState>*> pairs;
+  for (const auto& h : history_) pairs.push_back(&h);
+  std::sort(pairs.begin(), pairs.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
+  J ps = J::array();
+  for (const auto* p : pairs) {
+    const PairState& st = p->second;
+    J hist = J::array();
+    for (const auto& n : st.hist) hist.push_back(J::array({n.node, n.ft.x, n.ft.y, n.ft.z}));
+    ps.push_back(J{{"key", J::array({p->first.first, p->first.second})},
+                   {"stamp", st.stamp},
+                   {"drift", st.drift},
+                   {"has_cand", st.has_cand},
+                   {"cand", st.cand},
+                   {"hist", hist}});
+  }
+  out = J{{"engine", "lsdem"},
+          {"version", 1},
+          {"stamp", stamp_},
+          {"friction_scale", friction_scale_},
+          {"platen", J::array({platen_.position(), platen_.velocity()})},
+          {"platen_force", platen_force_},
+          {"floor_force", floor_force_},
+          {"bodies", bodies},
+          {"pairs", ps}};
+  return true;
+}
+
+void LsdemEngine::restore_state(const nlohmann::json& j) {
+  using J = nlohmann::json;
+  std::string at = "";
+  auto fail = [&](const std::string& msg) -> void {
+    throw std::invalid_argument("lsdem engine state" + (at.empty() ? std::string() : " at " + at) + ": " + msg);
+  };
+  auto num = [&](const J& v) {
+    if (!v.is_number() || !std::isfinite(v.get<double>())) fail("expected a finite number, got " + v.dump());
+    return v.get<double>();
+  };
+  auto integer = [&](const J& v) {
+    if (!v.is_number_integer()) fail("expected an integer, got " + v.dump());
+    return v.get<long>();
+  };
+  auto field = [&](const J& o, const char* k) -> const J& {
+    if (!o.is_object() || !o.contains(k)) fail(std::string("missing \"") + k + "\"");
+    return o.at(k);
+  };
+  if (!j.is_object()) fail("expected an object");
+  if (!field(j, "engine").is_string() || j.at("engine").get<std::string>() != "lsdem")
+    fail("written by engine " + j.at("engine").dump() + ", not lsdem");
+  if (integer(field(j, "version")) != 1) fail("unknown version " + j.at("version").dump());
+  if (!walls_kin_.empty()) fail("an engine with shape walls cannot be restored");
+  const J& jb = field(j, "bodies");
+  if (!jb.is_array() || jb.size() != bodies_.size())
+    fail("expected " + std::to_string(bodies_.size()) + " bodies (the checkpoint's grains), got " +
+         std::to_string(jb.is_array() ? jb.size() : 0));
+  // Bodies in the saved order: the broad phase and the force sums follow it.
+  std::vector<Body> order;
+  order.reserve(bodies_.size());
+  std::vector<char> used(bodies_.size(), 0);
+  for (std::size_t i = 0; i < jb.size(); ++i) {
+    at = "bodies/" + std::to_string(i);
+    const J& r = jb[i];
+    if (!r.is_array() || r.size() != 16) fail("expected [id, x(3), v(3), w(3), q(4), moved, turned]");
+    const GrainId id = integer(r[0]);
+    auto it = index_.find(id);
+    if (it == index_.end() || used[it->second]) fail("grain " + std::to_string(id) + " is not in the checkpoint or listed twice");
+    used[it->second] = 1;
+    Body b = bodies_[it->second];
+    double v[15];
+    for (int k = 0; k < 15; ++k) v[k] = num(r[k + 1]);
+    b.x = {v[0], v[1], v[2]};
+    b.v = {v[3], v[4], v[5]};
+    b.w = {v[6], v[7], v[8]};
+    b.q = Quat{v[9], v[10], v[11], v[12]};
+    if (std::abs(b.q.w * b.q.w + b.q.x * b.q.x + b.q.y * b.q.y + b.q.z * b.q.z - 1) > 1e-9) fail("quaternion is not a unit");
+    b.R = b.q.matrix();
+    b.moved = v[13];
+    b.turned = v[14];
+    order.push_back(b);
+  }
+  at = "pairs";
+  const J& jp = field(j, "pairs");
+  if (!jp.is_array()) fail("expected an array");
+  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> hist;
+  at = "stamp";
+  const long stamp = integer(field(j, "stamp"));
+  at = "pairs";
+  for (std::size_t i = 0; i < jp.size(); ++i) {
+    at = "pairs/" + std::to_string(i);
+    const J& p = jp[i];
+    const J& key = field(p, "key");
+    if (!key.is_array() || key.size() != 2) fail("key: expected [master id, partner id]");
+    const std::pair<GrainId, GrainId> k{integer(key[0]), integer(key[1])};
+    if (!index_.count(k.first) || (k.second >= 0 && !index_.count(k.second)))
+      fail("key names a grain that is not in the checkpoint");
+    PairState st;
+    st.stamp = integer(field(p, "stamp"));
+    st.drift = num(field(p, "drift"));
+    if (!field(p, "has_cand").is_boolean()) fail("has_cand: expected true or false");
+    st.has_cand = p.at("has_cand").get<bool>();
+    const std::size_t nodes = bodies_[index_.at(k.first)].sd->nodes.size();
+    const J& cand = field(p, "cand");
+    if (!cand.is_array()) fail("cand: expected an array of node indices");
+    for (const auto& c : cand) {
+      const long n = integer(c);
+      if (n < 0 || n >= static_cast<long>(nodes)) fail("cand: node index out of range");
+      st.cand.push_back(static_cast<int>(n));
+    }
+    const J& h = field(p, "hist");
+    if (!h.is_array()) fail("hist: expected an array of [node, fx, fy, fz]");
+    for (const auto& e : h) {
+      if (!e.is_array() || e.size() != 4) fail("hist: expected [node, fx, fy, fz]");
+      const long n = integer(e[0]);
+      if (n < 0 || n >= static_cast<long>(nodes)) fail("hist: node index out of range");
+      st.hist.push_back({static_cast<int>(n), Vec3{num(e[1]), num(e[2]), num(e[3])}});
+    }
+    if (!hist.emplace(k, std::move(st)).second) fail("pair listed twice");
+  }
+  at = "platen";
+  const J& pl = field(j, "platen");
+  if (!pl.is_array() || pl.size() != 2) fail("expected [position, velocity]");
+  const double z = num(pl[0]), vz = num(pl[1]);
+  at = "";
+  const double fs = num(field(j, "friction_scale"));
+  const double pf = num(field(j, "platen_force")), ff = num(field(j, "floor_force"));
+  // Everything checked: take it.
+  bodies_ = std::move(order);
+  index_.clear();
+  for (std::size_t i = 0; i < bodies_.size(); ++i) index_[bodies_[i].id] = i;
+  history_ = std::move(hist);
+  stamp_ = stamp;
+  friction_scale_ = fs;
+  platen_.sync(z, vz);
+  platen_force_ = pf;
+  floor_force_ = ff;
 }
 
 // ---- Factory and benchmark ----

@@ -149,6 +149,14 @@ class LsdemEngine final : public Engine {
   void set_moving_wall(int index, const WallKinematics& k) override;
   Vec3 moving_wall_force(int index) const override { return shape_wall_force(index); }
 
+  // Checkpoints: body states (positions, half-step velocities, exact quaternions, the last
+  // step's motion bounds), every pair's tangential history and candidate nodes, the step
+  // stamp, the platen's position and velocity and the forces last measured. Pairs are
+  // written sorted by key, so equal states give equal files. Not with shape walls (open
+  // scenes are not checkpointed).
+  bool save_state(nlohmann::json& out) const override;
+  void restore_state(const nlohmann::json& state) override;
+
   const LsdemSettings& settings() const { return s_; }
   const LsdemStats& stats() const { return stats_; }
   void reset_stats() { stats_ = LsdemStats{}; }

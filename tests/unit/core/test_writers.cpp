@@ -109,9 +109,9 @@ TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
     w.on_finish(*f.sc.sim, s, sum);  // 0.10 never reached
   }
   std::string psd = crumble::testing_support::slurp(f.dir / "psd.csv");
-  EXPECT_EQ(psd.rfind("label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain\n", 0), 0u);
+  EXPECT_EQ(psd.rfind("label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain,step\n", 0), 0u);
   EXPECT_NE(psd.find("\nstrain_0.05,2000000,"), std::string::npos) << psd;
-  EXPECT_NE(psd.find(",0.051\n"), std::string::npos);
+  EXPECT_NE(psd.find(",0.051,0\n"), std::string::npos);
   EXPECT_NE(psd.find("\nstrain_0.1_not_reached_final_state,"), std::string::npos);
   // Resumed at strain 0.06: the 5 % table is kept (not written twice), the 10 % one follows.
   PsdWriter r(f.dir.string(), {}, 2e6, {0.05, 0.10}, 0.06);
