@@ -410,8 +410,6 @@ void ShapeWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum)
   }
 }
 
-}
-
 Json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,
                   const std::string& breakage, const std::string& fragments, std::uint64_t seed, int threads) {
   Json j;
