@@ -249,7 +249,7 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
     sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(
-        out, VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts},
+        out, VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts, sc.packing.container.height},
         resumed ? st.step : -1));
   if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));

@@ -273,14 +273,14 @@ VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Conta
 // The container's floor and side walls (closed containers) and every moving wall at time t.
 // 3D: polygons (the container's faces up to its initial height, the walls' surface meshes);
 // 2D: polylines in the x–y plane (the walls' outlines closed).
-VtpPiece walls_piece(const Simulation& sim, double t) {
+VtpPiece walls_piece(const Simulation& sim, double t, double wall_height) {
   VtpPiece p;
   const bool two_d = sim.context().dimension == 2;
   p.kind = two_d ? VtpPiece::Cells::Lines : VtpPiece::Cells::Polys;
   auto& id = p.cell_field("wall", 1, true).values;
   const Container& c = sim.container();
   if (!c.open) {
-    const double lx = c.lx, ly = c.ly, h = c.height;
+    const double lx = c.lx, ly = c.ly, h = wall_height > 0 ? wall_height : c.height;
     if (two_d) {
       add_polygon_cell(p, {{0, 0, 0}, {lx, 0, 0}});
       id.push_back(kFloor);
@@ -391,7 +391,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
     blocks.push_back({block, name});
   };
   put("grains", grains_piece(sim, on));
-  put("walls", walls_piece(sim, s.time));
+  put("walls", walls_piece(sim, s.time, set_.wall_height));
   if (!sim.container().open) put("platen", platen_piece(sim, s));
   if (set_.contacts) put("contacts", contacts_piece(sim, contacts));
 

@@ -52,6 +52,8 @@ class VtkWriter : public Observer {
     long every = 0;           // steps between snapshots (0 = none)
     bool final_state = true;  // a snapshot of the final state
     bool contacts = false;    // contact-force lines (output.vtk_contacts)
+    double wall_height = 0;   // m, height of the drawn side walls (0: the container's as set);
+                              // the scenario's, so a resumed run draws the same walls
   };
   // resume_step >= 0: keep the snapshots of the earlier run up to that step.
   VtkWriter(const std::string& dir, Settings settings, long resume_step = -1);
