@@ -7,12 +7,17 @@
 
 namespace crumble {
 
-double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+namespace {
+// Least-squares slope of v(y) against log10(x) over the pairs with x > 0 that `v` accepts
+// (it returns NaN for the others). NaN with fewer than two usable pairs.
+template <class V>
+double slope_against_log10(const std::vector<double>& x, const std::vector<double>& y, V v) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int n = 0;
   for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
-    if (!(x[i] > 0) || !(y[i] > 0)) continue;
-    const double a = std::log10(x[i]), b = std::log10(y[i]);
+    const double b = v(y[i]);
+    if (!(x[i] > 0) || !std::isfinite(b)) continue;
+    const double a = std::log10(x[i]);
     sx += a;
     sy += b;
     sxx += a * a;
@@ -23,22 +28,14 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) 
   if (n < 2 || std::abs(den) < 1e-300) return std::numeric_limits<double>::quiet_NaN();
   return (n * sxy - sx * sy) / den;
 }
+}  // namespace
+
+double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  return slope_against_log10(x, y, [](double v) { return v > 0 ? std::log10(v) : std::numeric_limits<double>::quiet_NaN(); });
+}
 
 double semilog_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
-    if (!(x[i] > 0) || !std::isfinite(y[i])) continue;
-    const double a = std::log10(x[i]), b = y[i];
-    sx += a;
-    sy += b;
-    sxx += a * a;
-    sxy += a * b;
-    ++n;
-  }
-  const double den = n * sxx - sx * sx;
-  if (n < 2 || std::abs(den) < 1e-300) return std::numeric_limits<double>::quiet_NaN();
-  return (n * sxy - sx * sy) / den;
+  return slope_against_log10(x, y, [](double v) { return v; });
 }
 
 // Zhu & Zhao 2019, eq. 17 (counted as in their Fig. 16).
