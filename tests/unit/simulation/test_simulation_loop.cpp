@@ -117,25 +117,35 @@ struct Outcome {
   std::size_t events = 0;
 };
 
+// The squeeze loop: 1 ms steps sampled every step, a strain-rate platen stopped at 400 N,
+// breakage checked every 5 steps with every grain screened in (the fake engine has no walls).
+struct SqueezeSetup {
+  SimulationSettings ss;
+  LoadingSettings ls;
+  ScheduleSettings sch;
+  ScreeningSettings scr;
+};
+SqueezeSetup squeeze_setup() {
+  SqueezeSetup u;
+  u.ss.time_steps = {{1e300, 1e-3}};
+  u.ss.sample_every = 1;
+  u.ss.guards.containment = false;
+  u.ls.mode = "strain_rate";
+  u.ls.strain_rate = 1.0;
+  u.ls.stop_force = 400;
+  u.sch.every_steps = 5;
+  u.scr.force_threshold = false;
+  u.scr.min_diameter = 0;
+  return u;
+}
+
 Outcome run_with(int threads, double fines, bool chip = false, double model_delay = 0, double build_delay = 0) {
   EngineContext ctx;
-  SimulationSettings ss;
-  ss.time_steps = {{1e300, 1e-3}};
-  ss.sample_every = 1;
-  ss.threads = threads;
-  ss.fines_diameter = fines;
-  ss.guards.containment = false;  // the fake engine has no walls
-  LoadingSettings ls;
-  ls.mode = "strain_rate";
-  ls.strain_rate = 1.0;
-  ls.stop_force = 400;
-  ScheduleSettings sch;
-  sch.every_steps = 5;
-  ScreeningSettings scr;
-  scr.force_threshold = false;
-  scr.min_diameter = 0;
+  SqueezeSetup u = squeeze_setup();
+  u.ss.threads = threads;
+  u.ss.fines_diameter = fines;
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(model_delay),
-                 std::make_unique<EighthBuilder>(chip, build_delay), ctx, ss, ls, sch, scr, 123);
+                 std::make_unique<EighthBuilder>(chip, build_delay), ctx, u.ss, u.ls, u.sch, u.scr, 123);
   sim.set_container({0.01, 0.01, 0.01, 0});
   for (int i = 0; i < 8; ++i) {
     Grain g;
@@ -286,21 +296,9 @@ struct Lineage {
 
 Lineage run_lineage(std::unique_ptr<FragmentBuilder> builder, double child_factor) {
   EngineContext ctx;
-  SimulationSettings ss;
-  ss.time_steps = {{1e300, 1e-3}};
-  ss.sample_every = 1;
-  ss.guards.containment = false;
-  LoadingSettings ls;
-  ls.mode = "strain_rate";
-  ls.strain_rate = 1.0;
-  ls.stop_force = 400;
-  ScheduleSettings sch;
-  sch.every_steps = 5;
-  ScreeningSettings scr;
-  scr.force_threshold = false;
-  scr.min_diameter = 0;
+  const SqueezeSetup u = squeeze_setup();
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(0, child_factor),
-                 std::move(builder), ctx, ss, ls, sch, scr, 7);
+                 std::move(builder), ctx, u.ss, u.ls, u.sch, u.scr, 7);
   sim.set_container({0.01, 0.01, 0.01, 0});
   for (int i = 0; i < 4; ++i) {
     Grain g;
