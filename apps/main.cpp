@@ -35,6 +35,7 @@
 #include "scenarios/RunPipeline.h"
 #include "scenarios/ScenarioFactory.h"
 #include "scenarios/ShapeSpec.h"
+#include "scenarios/Stages.h"
 #include "scenarios/Tools.h"
 #include "scenarios/Writers.h"
 
@@ -300,6 +301,19 @@ int main(int argc, char** argv) {
               "Exit status: 0 written; 2 DIR or one of its files cannot be read (the message names it); 1 no python3 "
               "with matplotlib, or the plotting script failed.");
 
+  std::string stages_dir;
+  double stages_to = 30;
+  bool stages_json = false;
+  auto* stg = app.add_subcommand("stages", "where a run's wall time went per MPa, and its extrapolation to a higher stress");
+  stg->add_option("dir", stages_dir, "output folder of crumble run (it holds stages.csv)")->required();
+  stg->add_option("--to", stages_to, "extrapolate the wall time to this vertical stress, MPa (default 30: Zhu & Zhao 2019 §5)")
+      ->check(CLI::Range(0.0, 1e6));
+  stg->add_flag("--json", stages_json, "print JSON instead of Markdown");
+  stg->footer("Reads DIR/stages.csv (one row per MPa of vertical stress: wall time, grains, analyses, breaking analyses, "
+              "mean analysis time, engine time per step), fits the wall time per MPa against the grain count and the "
+              "grain count against the stress (power laws over the stages with breakage), and extrapolates. "
+              "docs/performance.md shows it on the Zhu & Zhao run.");
+
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON line on stdout)");
   bench->add_option("what", bench_what, "engine | pd-kernel | lsdem")->required();
   bench->add_option("--steps", bench_steps, "steps")->check(CLI::Range(1L, 100000000L));
@@ -326,6 +340,12 @@ int main(int argc, char** argv) {
     if (*swp) return cmd_sweep(file, out, sweep_req, study, swp_jobs->count() > 0);
     if (*val) return cmd_validate(file, sets, print);
     if (*plt) return cmd_plot(plot_dir);
+    if (*stg) {
+      std::string md;
+      const auto j = stage_report(stages_dir, stages_to * 1e6, &md);
+      std::cout << (stages_json ? j.dump(2) + "\n" : md);
+      return 0;
+    }
     if (*lst) {
       if (list_markdown && list_options.empty()) throw InputError("list --markdown needs --options NAME");
       return list_options.empty() ? cmd_list() : cmd_list_options(list_options, list_markdown);

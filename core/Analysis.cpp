@@ -38,6 +38,29 @@ double semilog_slope(const std::vector<double>& x, const std::vector<double>& y)
   return slope_against_log10(x, y, [](double v) { return v; });
 }
 
+double PowerLaw::operator()(double x) const { return coefficient * std::pow(x, exponent); }
+
+PowerLaw fit_power_law(const std::vector<double>& x, const std::vector<double>& y) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
+    if (!(x[i] > 0) || !(y[i] > 0) || !std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
+    const double lx = std::log(x[i]), ly = std::log(y[i]);
+    sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly;
+    ++n;
+  }
+  PowerLaw p;
+  p.points = n;
+  const double den = n * sxx - sx * sx;
+  if (n < 2 || !(std::abs(den) > 1e-12 * std::max(1.0, n * sxx))) {
+    p.coefficient = p.exponent = std::numeric_limits<double>::quiet_NaN();
+    return p;
+  }
+  p.exponent = (n * sxy - sx * sy) / den;
+  p.coefficient = std::exp((sy - p.exponent * sx) / n);
+  return p;
+}
+
 // Zhu & Zhao 2019, eq. 17 (counted as in their Fig. 16).
 double fractal_dimension(const std::vector<double>& d, int sieves) {
   if (d.size() < 2) return std::numeric_limits<double>::quiet_NaN();

@@ -26,6 +26,16 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
 // fewer than two usable pairs.
 double semilog_slope(const std::vector<double>& x, const std::vector<double>& y);
 
+// y = coefficient · x^exponent by least squares of log y against log x over the pairs with
+// x, y > 0 (both finite). NaN coefficient and exponent with fewer than two usable pairs or
+// when every usable x is the same.
+struct PowerLaw {
+  double coefficient = 0, exponent = 0;
+  int points = 0;
+  double operator()(double x) const;
+};
+PowerLaw fit_power_law(const std::vector<double>& x, const std::vector<double>& y);
+
 // ---- Particle size distribution by mass ----
 
 // Percent (0–100) of the total mass passing each sieve: grains with size <= sieve. Sizes in

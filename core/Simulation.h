@@ -103,6 +103,8 @@ class Simulation {
   const EngineContext& context() const { return ctx_; }
   const Container& container() const { return container_; }
   const SimulationSettings& settings() const { return settings_; }
+  // Where the wall time of this run (since its start or resume) went so far.
+  const Timings& timings() const { return timings_; }
   const Loading& loading() const { return loading_; }
   double solid_volume() const;  // in the engine + removed fines
   double removed_volume() const { return removed_volume_; }

@@ -38,7 +38,7 @@ extern "C" void on_stop_signal(int sig) {
 
 // Files a run writes into --out (and their temporary names): the only files --force removes.
 bool is_run_output(const std::string& name) {
-  static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv",
+  static const std::set<std::string> files = {"summary.json", "series.csv", "events.csv", "breakage_per_mpa.csv", "stages.csv",
                                               "ncl.csv", "psd.csv", "shape.csv", "product_psd.csv", "product.csv",
                                               "grains.pvd", "scene.pvd", "analyses.pvd", "effective_scenario.json",
                                               "packing.json", "checkpoint.json"};

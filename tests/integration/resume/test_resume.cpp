@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scenarios/Writers.h"
+
 #include "scenarios/Registry.h"
 #include "tests/support/CliRunner.h"
 
@@ -118,12 +120,33 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
 
   ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;  // no .part left
   for (const auto& f : files_under(whole)) {
-    if (f == "summary.json" || f == "events.csv") continue;
+    if (f == "summary.json" || f == "events.csv" || f == "stages.csv") continue;
     EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (kill step " << kill_step << ")";
   }
   EXPECT_EQ(without_columns(slurp(whole / "events.csv"), {"wall_ms"}),
             without_columns(slurp(killed / "events.csv"), {"wall_ms"}))
       << "kill step " << kill_step;
+  // stages.csv: the same stages, steps, grains and analysis counts; wall times are the process's.
+  const std::set<std::string> wall_columns{"resumed", "wall_s", "wall_total_s", "engine_s", "engine_ms_per_step",
+                                           "analysis_s", "mean_analysis_ms", "breaking_share_of_analysis_time",
+                                           "fragments_s"};
+  EXPECT_EQ(without_columns(slurp(whole / "stages.csv"), wall_columns),
+            without_columns(slurp(killed / "stages.csv"), wall_columns))
+      << "kill step " << kill_step;
+  {
+    // Its stages add up to the run: every analysis and breakage event in exactly one stage.
+    const auto rows = crumble::read_csv((whole / "stages.csv").string());
+    ASSERT_GE(rows.size(), 2u);
+    std::size_t ca = 0, ce = 0;
+    for (std::size_t c = 0; c < rows[0].size(); ++c) {
+      if (rows[0][c] == "analyses") ca = c;
+      if (rows[0][c] == "breaking_analyses") ce = c;
+    }
+    long na = 0, ne = 0;
+    for (std::size_t i = 1; i < rows.size(); ++i) na += std::stol(rows[i][ca]), ne += std::stol(rows[i][ce]);
+    EXPECT_EQ(na, sa["analyses"].get<long>());
+    EXPECT_EQ(ne, sa["breakage_events"].get<long>());
+  }
   // summary.json: equal but for wall times, the resume marker and the representation counts
   // (a cost of the process: a resumed run counts what it rebuilt from the checkpoint).
   nlohmann::json ja = sa, jb = sb;

@@ -19,6 +19,20 @@ TEST(Analysis, LogLogSlopeOfAPowerLaw) {
   EXPECT_TRUE(std::isnan(loglog_slope({1.0}, {1.0})));
 }
 
+TEST(Analysis, PowerLawFitRecoversCoefficientAndExponent) {
+  // y = 0.0123 · x^1.37 exactly; points with x <= 0 or y <= 0 are left out.
+  std::vector<double> x{-1.0, 0.0, 720, 1500, 3000, 9000, 27400}, y;
+  for (double v : x) y.push_back(v > 0 ? 0.0123 * std::pow(v, 1.37) : 5.0);
+  const PowerLaw p = fit_power_law(x, y);
+  EXPECT_EQ(p.points, 5);
+  EXPECT_NEAR(p.exponent, 1.37, 1e-12);
+  EXPECT_NEAR(p.coefficient, 0.0123, 1e-12 * 0.0123 * 1e3);
+  EXPECT_NEAR(p(2000.0), 0.0123 * std::pow(2000.0, 1.37), 1e-9);
+  // Fewer than two usable points, or one x only: no fit.
+  EXPECT_TRUE(std::isnan(fit_power_law({1.0}, {2.0}).exponent));
+  EXPECT_TRUE(std::isnan(fit_power_law({3.0, 3.0, 3.0}, {1.0, 2.0, 4.0}).exponent));
+}
+
 namespace {
 std::vector<double> pareto(double D, int n) {
   // Sizes with N(d > s) ∝ s^-D above 0.1 mm (Pareto, truncation far away at 1 m).

@@ -1,0 +1,68 @@
+// Where the time of a long run goes, stage by stage (issue: the full Zhu & Zhao run to
+// 30 MPa). `stages.csv` gets one row per MPa of vertical stress (the commanded stress of a
+// stress ramp, else the largest measured platen stress so far): the wall time of the stage,
+// the grains at its end, the analyses and the breaking analyses in it, the mean analysis
+// time and the engine time per step. `crumble stages DIR` reads it back, fits the cost per
+// MPa against the grain count and the grain count against the stress (power laws, core/
+// Analysis.h fit_power_law) and extrapolates the wall time to a target stress.
+#pragma once
+#include <chrono>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "scenarios/Writers.h"
+
+namespace crumble {
+
+class StagesWriter : public Observer {
+ public:
+  // width: the stage width in Pa (1 MPa). resume_step >= 0: continue the table of a run
+  // resumed at that step (the rows up to it are kept; a stage in progress at a kill loses
+  // the wall time spent on it since the last checkpoint and says so: resumed = 1).
+  StagesWriter(const std::string& dir, double width = 1e6, long resume_step = -1);
+  void on_start(const Simulation&, const RunState& s) override;
+  void on_analysis(const Simulation&, const AnalysisRecord& r) override;
+  void on_breakage(const Simulation&, const BreakageEvent& e) override;
+  void on_sample(const Simulation& sim, const RunState& s) override;
+  void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
+
+ private:
+  // The state at a stage boundary: counters from RunState (restored on resume, so a resumed
+  // run writes the same counts as an uninterrupted one) and wall times of this process.
+  struct Mark {
+    std::chrono::steady_clock::time_point clock;
+    double engine = 0, analyses = 0, fragments = 0;  // s, Simulation::timings()
+    long step = 0, analyses_total = 0, events_total = 0;
+    std::size_t grains = 0;
+  };
+  Mark mark(const Simulation& sim, const RunState& s) const;
+  void write_row(const Simulation& sim, const RunState& s, double to, bool complete);
+
+  double width_;
+  // From the last kept row of a resumed run.
+  struct Resume {
+    bool found = false;
+    double from = 0, wall_total = 0;
+    long step = 0, analyses_total = 0, events_total = 0;
+    std::size_t grains = 0;
+  } resume_;
+  bool resumed_ = false;
+  long resume_step_ = -1;
+  CsvStream csv_;
+  long stage_ = -1;     // index of the stage in progress (its stress_from = stage_ · width)
+  double from_ = 0;     // Pa: where the stage in progress began
+  double level_ = 0;    // Pa: the loading level so far
+  double wall_total_ = 0;
+  bool stage_resumed_ = false;
+  Mark start_;
+  double analysis_ms_ = 0, breaking_ms_ = 0;  // per-analysis wall times summed (all threads)
+  long analyses_seen_ = 0;                    // analyses this process saw in the stage
+};
+
+// The table of DIR/stages.csv with the fits and the extrapolation to `target` Pa, as JSON;
+// `markdown` gets the same as a Markdown table and text. Throws InputError when the file is
+// missing or malformed (naming the file, line and column).
+nlohmann::json stage_report(const std::string& dir, double target, std::string* markdown = nullptr);
+
+}  // namespace crumble

@@ -1,0 +1,108 @@
+// `crumble stages DIR`: the per-MPa cost table of a run, its power-law fits and the
+// extrapolation to a higher stress (scenarios/Stages.h), on a synthetic stages.csv whose
+// answer is known in closed form, and its errors on bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "scenarios/RunPipeline.h"
+#include "scenarios/Stages.h"
+#include "tests/support/CliRunner.h"
+
+namespace fs = std::filesystem;
+using crumble::testing_support::run_cli;
+
+namespace {
+// Grains N(σ) = 720·(σ/MPa)^1.2 at each stage's end (stage 0–1 MPa without breakage), and a wall
+// time per MPa of 0.002·N^1.5 at the stage's mean grain count.
+double grains(double s) { return 720 * std::pow(s, 1.2); }
+double cost(double n) { return 0.002 * std::pow(n, 1.5); }
+
+fs::path write_table(const std::string& name, int stages, bool partial) {
+  const fs::path dir = fs::temp_directory_path() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream o(dir / "stages.csv");
+  o << std::setprecision(17)
+    << "stress_from_MPa,stress_to_MPa,complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,"
+       "engine_s,engine_ms_per_step,analyses,breaking_analyses,analysis_s,mean_analysis_ms,"
+       "breaking_share_of_analysis_time,fragments_s,analyses_total,breakage_events_total\n";
+  double total = 0, n0 = 720;
+  for (int k = 0; k < stages; ++k) {
+    const double n1 = k == 0 ? 720 : grains(k + 1);
+    const double w = k == 0 ? 5.0 : cost(0.5 * (n0 + n1));
+    total += w;
+    o << k << ',' << k + 1 << ",1,0," << 100 * (k + 1) << ",0.1," << static_cast<long>(n0) << ','
+      << static_cast<long>(n1) << ',' << w << ',' << total << ",100,1,10," << (k ? 50 : 0) << ',' << (k ? 20 : 0)
+      << ",1," << (k ? "30" : "") << ',' << (k ? "0.7" : "") << ",0.1,0,0\n";
+    n0 = n1;
+  }
+  if (partial) {
+    const double n1 = grains(stages + 0.4), w = 0.4 * cost(0.5 * (n0 + n1));
+    o << stages << ',' << stages + 0.4 << ",0,0,1,0.1," << static_cast<long>(n0) << ',' << static_cast<long>(n1) << ','
+      << w << ',' << total + w << ",1,1,1,0,0,0,,,0,0,0\n";
+  }
+  return dir;
+}
+}  // namespace
+
+TEST(Stages, FitsAndExtrapolatesAPowerLawRun) {
+  // Grain counts are written as integers, so the fits recover the laws to rounding (< 0.1 %).
+  const fs::path dir = write_table("crumble_stages_fit", 12, true);
+  std::string md;
+  const auto j = crumble::stage_report(dir.string(), 30e6, &md);
+  ASSERT_TRUE(j.contains("cost_fit")) << j.dump(2);
+  EXPECT_NEAR(j["cost_fit"]["b"].get<double>(), 1.5, 2e-3);
+  EXPECT_NEAR(j["grains_fit"]["k"].get<double>(), 1.2, 2e-3);
+  EXPECT_EQ(j["cost_fit"]["stages"].get<int>(), 12);  // the stages with breakage, the partial one too
+  // The partial stage (12–12.4 MPa) is where the measurement ends; the extrapolation
+  // continues its grain count (scaled) with the fitted law to 30 MPa.
+  EXPECT_DOUBLE_EQ(j["measured_to_MPa"].get<double>(), 12.4);
+  const double measured = j["measured_wall_s"].get<double>();
+  double expect = measured, n = static_cast<double>(static_cast<long>(grains(12.4)));
+  const double scale = n / grains(12.4);
+  double s0 = 12.4;
+  for (double s1 : {13.0, 14.0, 15.0, 16.0, 17.0, 18.0, 19.0, 20.0, 21.0, 22.0, 23.0, 24.0, 25.0, 26.0, 27.0, 28.0,
+                    29.0, 30.0}) {
+    const double n1 = scale * grains(s1);
+    expect += cost(0.5 * (n + n1)) * (s1 - s0);
+    n = n1;
+    s0 = s1;
+  }
+  EXPECT_NEAR(j["predicted_wall_s"].get<double>(), expect, 0.01 * expect);
+  EXPECT_NE(md.find("| 12–12.4 (partial) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Extrapolated to 30 MPa"), std::string::npos) << md;
+}
+
+TEST(Stages, TooFewStagesSayToRunFurther) {
+  const fs::path dir = write_table("crumble_stages_short", 3, false);
+  const auto j = crumble::stage_report(dir.string(), 30e6);
+  EXPECT_FALSE(j.contains("predicted_wall_s"));
+  EXPECT_NE(j["note"].get<std::string>().find("run further"), std::string::npos);
+}
+
+TEST(Stages, CliNamesAMissingOrBrokenFile) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_stages_missing";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto r = run_cli("stages " + dir.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("stages.csv"), std::string::npos) << r.output;
+  const fs::path bad = write_table("crumble_stages_bad", 4, false);
+  {
+    std::ofstream o(bad / "stages.csv", std::ios::app);
+    o << "4,5,1,0,500,0.1,9,9,abc,1,1,1,1,0,0,0,,,0,0,0\n";
+  }
+  r = run_cli("stages " + bad.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("line 6, column wall_s"), std::string::npos) << r.output;
+  r = run_cli("stages " + write_table("crumble_stages_ok", 12, false).string() + " --to 20 --json");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("\"predicted_hours\""), std::string::npos) << r.output;
+}
