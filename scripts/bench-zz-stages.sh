@@ -8,18 +8,19 @@
 #
 #   bash scripts/bench-zz-stages.sh [BUDGET_S] [OUT] [extra crumble run arguments]
 #
-# Defaults: BUDGET_S 3600, OUT out/zz_stages, 2 threads (THREADS). Needs build/crumble.
+# Defaults: BUDGET_S 3600, OUT out/zz_stages, 2 threads (THREADS), binary build/crumble (CRUMBLE).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 budget=${1:-3600}
 out=${2:-out/zz_stages}
 shift $(( $# > 2 ? 2 : $# )) || true
 threads=${THREADS:-2}
+crumble=${CRUMBLE:-./build/crumble}
 args=(run scenarios/oedometer_zhu_zhao.json --out "$out" --threads "$threads" --quiet "$@")
 [ -f "$out/checkpoint.json" ] && args+=(--resume)
-echo "bench-zz-stages: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg), budget ${budget} s: build/crumble ${args[*]}" >&2
+echo "bench-zz-stages: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg), budget ${budget} s: $crumble ${args[*]}" >&2
 status=0
-timeout --signal=TERM --kill-after=600 "$budget" ./build/crumble "${args[@]}" || status=$?
+timeout --signal=TERM --kill-after=600 "$budget" "$crumble" "${args[@]}" || status=$?
 # 0: the run reached 30 MPa; 124 (timeout) or 143 (SIGTERM): stopped cleanly, resumable.
 case $status in 0|124|143) ;; *) echo "bench-zz-stages: crumble exited with $status" >&2; exit $status ;; esac
-./build/crumble stages "$out" --to 30
+"$crumble" stages "$out" --to 30
