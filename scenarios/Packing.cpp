@@ -339,7 +339,7 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
   if (!e.set_friction_scale(ss.friction_scale))
     throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
-                                                            "' cannot change friction while settling; use 1 or lsdem");
+                                                            "' cannot change friction while settling; use 1");
   const long guard_every = std::max(1L, sim.settings().sample_every);
   res.converged = false;
   while (steps < max_steps) {

@@ -209,7 +209,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   if (sc.packing.settle && sc.packing.settle_settings.friction_scale != 1.0) {
     if (!engine->set_friction_scale(sc.packing.settle_settings.friction_scale))
       throw ConfigError("/packing/settle/friction_scale",
-                        "the engine '" + et + "' cannot change friction while settling; use 1 or lsdem");
+                        "the engine '" + et + "' cannot change friction while settling; use 1");
     engine->set_friction_scale(1.0);
   }
   if (!sc.packing.walls.empty()) {

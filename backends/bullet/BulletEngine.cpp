@@ -44,6 +44,7 @@ struct BodyTag {
   double friction = 0;          // grain: material friction μ (walls: unused)
   double wall_friction = 0;     // grain: friction against walls
   double rolling_friction = 0;  // grain: rolling-friction coefficient (Bullet convention)
+  double scale = 1;             // grain: Engine::set_friction_scale (settling a packing)
 };
 
 const BodyTag* tag_of(const btCollisionObject* o) {
@@ -64,7 +65,7 @@ const BodyTag* grain_against_wall(const btCollisionObject* b0, const btCollision
 // grain material's wall friction (Zhu & Zhao 2019: 0). Bodies not made by crumble keep Bullet's
 // rule.
 btScalar combined_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
-  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->wall_friction;
+  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->wall_friction * g->scale;
   return std::clamp(b0->getFriction() * b1->getFriction(), btScalar(-10), btScalar(10));
 }
 
@@ -72,10 +73,10 @@ btScalar combined_friction(const btCollisionObject* b0, const btCollisionObject*
 // grain pair. Bullet reads it as a lever arm in its internal length unit (≈ the reference
 // grain diameter here): the rolling-resistance torque is at most μr·N·unit.
 btScalar combined_rolling_friction(const btCollisionObject* b0, const btCollisionObject* b1) {
-  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->rolling_friction;
+  if (const BodyTag* g = grain_against_wall(b0, b1)) return g->rolling_friction * g->scale;
   const BodyTag* t0 = tag_of(b0);
   const BodyTag* t1 = tag_of(b1);
-  if (t0 && t1) return std::sqrt(t0->rolling_friction * t1->rolling_friction);
+  if (t0 && t1) return std::sqrt(t0->rolling_friction * t0->scale * t1->rolling_friction * t1->scale);
   return std::clamp(b0->getRollingFriction() * b1->getFriction() + b1->getRollingFriction() * b0->getFriction(),
                     btScalar(-10), btScalar(10));  // Bullet's own rule
 }
@@ -222,6 +223,18 @@ struct BulletEngine::Impl {
   std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
   double total_mass = 0;  // kg, physical
   double last_dt = 0;
+  double friction_scale = 1;  // set_friction_scale
+
+  // Sliding friction √(μ·s) per grain body (Bullet multiplies a pair's), and the tag's scale
+  // for the wall and rolling terms of the combine callbacks. Bullet combines a contact's
+  // friction whenever it refreshes the contact point, so the change acts from the next step.
+  void apply_friction_scale(double s) {
+    friction_scale = s;
+    for (auto& [id, gb] : grains) {
+      gb->tag.scale = s;
+      gb->body->setFriction(std::sqrt(gb->tag.friction * s));
+    }
+  }
 
   Impl(const Options& o, const EngineContext& c) : opt(o), ctx(c) {
     std::string why;
@@ -473,6 +486,7 @@ struct BulletEngine::Impl {
     gb->tag.friction = mat.friction;
     gb->tag.wall_friction = mat.wall_friction;
     gb->tag.rolling_friction = mat.rolling_friction;
+    gb->tag.scale = friction_scale;
     gb->mass = mat.density * g.shape->volume();
     // Inertia from the shape's exact mass properties (calculateLocalInertia of a hull is a
     // box estimate); both scaled by mass_scale (Zhu & Zhao 2019 §5).
@@ -480,7 +494,7 @@ struct BulletEngine::Impl {
     const Vec3 inertia = gb->entry->moments * (mat.density * opt.mass_scale * scale * scale);
     btRigidBody::btRigidBodyConstructionInfo info(m, nullptr, gb->entry->collision.get(), bt(inertia));
     info.m_startWorldTransform = body_transform(*gb->entry, g.position, g.orientation);
-    info.m_friction = std::sqrt(mat.friction);
+    info.m_friction = std::sqrt(mat.friction * friction_scale);
     info.m_rollingFriction = mat.rolling_friction;
     info.m_restitution = 0;
     info.m_linearDamping = 0;
@@ -742,6 +756,11 @@ BulletEngine::~BulletEngine() = default;
 
 void BulletEngine::set_container(const Container& c) { impl_->set_container(c); }
 void BulletEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
+bool BulletEngine::set_friction_scale(double scale) {
+  if (!(scale >= 0 && scale <= 1)) return false;
+  impl_->apply_friction_scale(scale);
+  return true;
+}
 void BulletEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
 std::size_t BulletEngine::grain_count() const { return impl_->grains.size(); }
 void BulletEngine::step(double dt) { impl_->step(dt); }

@@ -271,6 +271,7 @@ struct OdeEngine::Impl {
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
   std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
   double total_mass = 0;  // kg, physical
+  double friction_scale = 1;  // set_friction_scale: multiplies μ and the rolling coefficient
   double last_dt = 0;
   std::uint64_t step_count = 0;
   std::vector<PointRec> recs;
@@ -525,6 +526,8 @@ struct OdeEngine::Impl {
       mu = a.material == b_grain->material ? ma.friction : std::sqrt(ma.friction * mb.friction);
       rho = a.material == b_grain->material ? ma.rolling_friction : std::sqrt(ma.rolling_friction * mb.rolling_friction);
     }
+    mu *= friction_scale;
+    rho *= friction_scale;
     // dContactApprox1: friction (and rolling) limits proportional to the normal force, so
     // μ is a Coulomb coefficient (otherwise ODE reads it as a force bound).
     s.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactMu2;
@@ -859,6 +862,11 @@ OdeEngine::~OdeEngine() = default;
 
 void OdeEngine::set_container(const Container& c) { impl_->set_container(c); }
 void OdeEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
+bool OdeEngine::set_friction_scale(double scale) {
+  if (!(scale >= 0 && scale <= 1)) return false;
+  impl_->friction_scale = scale;  // ODE builds its contact joints afresh every step
+  return true;
+}
 void OdeEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
 std::size_t OdeEngine::grain_count() const { return impl_->grains.size(); }
 void OdeEngine::step(double dt) { impl_->step(dt); }

@@ -76,6 +76,7 @@ class OdeEngine final : public Engine {
   std::string name() const override { return "ode"; }
   void set_container(const Container& c) override;
   void add_grain(const Grain& g) override;
+  bool set_friction_scale(double scale) override;
   void remove_grain(GrainId id) override;
   std::size_t grain_count() const override;
   void step(double dt) override;
