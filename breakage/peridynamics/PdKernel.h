@@ -8,6 +8,8 @@
 // split of the rows between threads does not change any bit of the result.
 #pragma once
 #include <cstdint>
+#include <string>
+#include <vector>
 
 namespace crumble::pd::kernel {
 
@@ -16,16 +18,16 @@ namespace crumble::pd::kernel {
 void dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr,
                 const double* len, double* alive, double* pos, const double* g, const double* a, double sc);
 
-// Pass 2: f_i = Σ_j alive [(a_i θ_i + a_j θ_j) r + kb e] Y/|Y| (eqs. 1–2), kb = b_i + b_j per bond.
+// Pass 2: f_i = Σ_j alive [(a_i θ_i + a_j θ_j) r + (b_i + b_j) e] Y/|Y| (eqs. 1–2), b per point.
 void force(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr, const double* len,
-           const double* alive, const double* kb, const double* pos, double* fx, double* fy, double* fz);
+           const double* alive, const double* b, const double* pos, double* fx, double* fy, double* fz);
 
 // The portable (auto-vectorised) versions, whatever the CPU; tests compare them with the
 // dispatched ones.
 void dilatation_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr,
                          const double* len, double* alive, double* pos, const double* g, const double* a, double sc);
 void force_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr,
-                    const double* len, const double* alive, const double* kb, const double* pos, double* fx,
+                    const double* len, const double* alive, const double* b, const double* pos, double* fx,
                     double* fy, double* fz);
 
 // The same two passes linearised about the reference positions (rx, ry, rz) for a small
@@ -40,7 +42,13 @@ void linear_force(std::int32_t i0, std::int32_t i1, const std::int32_t* off, con
                   const double* ux, const double* uy, const double* uz, const double* at, const double* b,
                   double* fx, double* fy, double* fz);
 
-// "avx512" or "generic": which version of dilatation/force runs on this CPU.
+// "avx512", "avx2" or "generic": which version of dilatation/force runs (the best this CPU
+// has, unless select_isa() chose another). All versions give bitwise the same results.
 const char* isa();
+// The versions this CPU can run ("generic" always).
+std::vector<std::string> available_isas();
+// Runs `name` from now on, process-wide (benchmarks, tests); "" returns to the best one.
+// std::invalid_argument for an unknown name or one this CPU cannot run.
+void select_isa(const std::string& name);
 
 }  // namespace crumble::pd::kernel

@@ -66,9 +66,6 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
       b_[i] = 15.0 * mat_.shear * V / m;
     }
   }
-  kb_.resize(L_.neighbours.size());
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) kb_[q] = b_[i] + b_[L_.neighbours[q]];
 }
 
 void PdSystem::fix(const std::vector<std::int32_t>& pts) {
@@ -127,7 +124,7 @@ void PdSystem::compute_forces(int threads) {
   threads = std::max(1, threads);
   if (threads == 1) {
     kernel::dilatation(0, n, off, nbr, len, alive_.data(), pos_.data(), g_.data(), a_.data(), sc_);
-    kernel::force(0, n, off, nbr, len, alive_.data(), kb_.data(), pos_.data(), fx_.data(), fy_.data(), fz_.data());
+    kernel::force(0, n, off, nbr, len, alive_.data(), b_.data(), pos_.data(), fx_.data(), fy_.data(), fz_.data());
     return;
   }
   // Blocks of rows per thread; each row is computed exactly as in the serial call.
@@ -141,7 +138,7 @@ void PdSystem::compute_forces(int threads) {
                          a_.data(), sc_);
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), kb_.data(), pos_.data(),
+      kernel::force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), b_.data(), pos_.data(),
                     fx_.data(), fy_.data(), fz_.data());
   }
 }
