@@ -61,7 +61,8 @@ CRUMBLE_PD_INLINE double reduce8(const double* l) {
 CRUMBLE_PD_CLONES
 void dilatation_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* __restrict off,
                         const std::int32_t* __restrict nbr, const double* __restrict len, double* __restrict alive,
-                        double* __restrict pos, const double* __restrict g, const double* __restrict a, double sc) {
+                        double* __restrict cur, double* __restrict pos, const double* __restrict g,
+                        const double* __restrict a, double sc) {
   for (std::int32_t i = i0; i < i1; ++i) {
     const double xi = pos[4 * i], yi = pos[4 * i + 1], zi = pos[4 * i + 2];
     double acc[kLanes] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -70,7 +71,9 @@ void dilatation_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* _
       const int m = std::min<std::int32_t>(kLanes, q1 - q);
       for (int k = 0; k < m; ++k) {
         const double r = len[q + k];
-        const double e = bond(pos, nbr[q + k], xi, yi, zi).l - r;
+        const double l = bond(pos, nbr[q + k], xi, yi, zi).l;
+        cur[q + k] = l;
+        const double e = l - r;
         const double w = keep(e, r, sc, alive[q + k]);
         alive[q + k] = w;
         acc[k] += w * r * e;
@@ -83,7 +86,8 @@ void dilatation_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* _
 CRUMBLE_PD_CLONES
 void force_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* __restrict off,
                    const std::int32_t* __restrict nbr, const double* __restrict len, const double* __restrict alive,
-                   const double* __restrict b, const double* __restrict pos, double* __restrict fx,
+                   const double* __restrict cur, const double* __restrict b, const double* __restrict pos,
+                   double* __restrict fx,
                    double* __restrict fy, double* __restrict fz) {
   for (std::int32_t i = i0; i < i1; ++i) {
     const double xi = pos[4 * i], yi = pos[4 * i + 1], zi = pos[4 * i + 2], ati = pos[4 * i + 3], bi = b[i];
@@ -94,11 +98,11 @@ void force_portable(std::int32_t i0, std::int32_t i1, const std::int32_t* __rest
       const int m = std::min<std::int32_t>(kLanes, q1 - q);
       for (int k = 0; k < m; ++k) {
         const std::int32_t j = nbr[q + k];
-        const Bond y = bond(pos, j, xi, yi, zi);
-        const double f = force_scale(alive[q + k], ati, pos[4 * j + 3], len[q + k], bi + b[j], y.l);
-        sx[k] += f * y.dx;
-        sy[k] += f * y.dy;
-        sz[k] += f * y.dz;
+        const double dx = pos[4 * j] - xi, dy = pos[4 * j + 1] - yi, dz = pos[4 * j + 2] - zi;
+        const double f = force_scale(alive[q + k], ati, pos[4 * j + 3], len[q + k], bi + b[j], cur[q + k]);
+        sx[k] += f * dx;
+        sy[k] += f * dy;
+        sz[k] += f * dz;
       }
     }
     fx[i] = reduce8(sx);
@@ -140,7 +144,8 @@ struct Bond4 {
 __attribute__((target("avx2"), always_inline)) inline Bond4 bond4(const double* pos, const std::int32_t* nbr,
                                                                   const double* len, std::int32_t q, int n,
                                                                   __m256d vx, __m256d vy, __m256d vz,
-                                                                  const double* pb = nullptr) {
+                                                                  const double* pb = nullptr,
+                                                                  const double* cur = nullptr) {
   Bond4 b;
   const std::int32_t* j = nbr + q;
   std::int32_t pad[4];
@@ -158,8 +163,12 @@ __attribute__((target("avx2"), always_inline)) inline Bond4 bond4(const double* 
   b.dx = _mm256_sub_pd(X, vx);
   b.dy = _mm256_sub_pd(Y, vy);
   b.dz = _mm256_sub_pd(Z, vz);
-  b.l = _mm256_sqrt_pd(
-      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(b.dx, b.dx), _mm256_mul_pd(b.dy, b.dy)), _mm256_mul_pd(b.dz, b.dz)));
+  if (cur)  // |Y| stored by pass 1 (1 in lanes >= n, so that no lane divides by 0)
+    b.l = n >= 4 ? _mm256_loadu_pd(cur + q)
+                 : _mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_maskload_pd(cur + q, _mm256_castpd_si256(b.m)), b.m);
+  else
+    b.l = _mm256_sqrt_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(b.dx, b.dx), _mm256_mul_pd(b.dy, b.dy)),
+                                       _mm256_mul_pd(b.dz, b.dz)));
   b.e = _mm256_sub_pd(b.l, b.r);
   b.at = W;
   if (pb) b.bj = _mm256_setr_pd(pb[j[0]], pb[j[1]], pb[j[2]], pb[j[3]]);
@@ -177,9 +186,13 @@ __attribute__((target("avx2"), always_inline)) inline double reduce8_avx2(__m256
 
 // Pass 1 on four bonds [q, q + n): break, store alive, acc += (w r) e.
 __attribute__((target("avx2"), always_inline)) inline __m256d dilatation4(
-    const double* pos, const std::int32_t* nbr, const double* len, double* alive, std::int32_t q, int n, __m256d vx,
-    __m256d vy, __m256d vz, __m256d vsc, __m256d acc) {
+    const double* pos, const std::int32_t* nbr, const double* len, double* alive, double* cur, std::int32_t q, int n,
+    __m256d vx, __m256d vy, __m256d vz, __m256d vsc, __m256d acc) {
   const Bond4 b = bond4(pos, nbr, len, q, n, vx, vy, vz);
+  if (n >= 4)
+    _mm256_storeu_pd(cur + q, b.l);
+  else
+    _mm256_maskstore_pd(cur + q, _mm256_castpd_si256(b.m), b.l);
   const __m256d ok = _mm256_cmp_pd(b.e, _mm256_mul_pd(vsc, b.r), _CMP_LE_OQ);
   const __m256d w = _mm256_and_pd(ok, load_lanes(alive + q, n, b.m));
   if (n >= 4)
@@ -192,9 +205,9 @@ __attribute__((target("avx2"), always_inline)) inline __m256d dilatation4(
 __attribute__((target("avx2"))) void dilatation_avx2(std::int32_t i0, std::int32_t i1,
                                                      const std::int32_t* __restrict off,
                                                      const std::int32_t* __restrict nbr, const double* __restrict len,
-                                                     double* __restrict alive, double* __restrict pos,
-                                                     const double* __restrict g, const double* __restrict a,
-                                                     double sc) {
+                                                     double* __restrict alive, double* __restrict cur,
+                                                     double* __restrict pos, const double* __restrict g,
+                                                     const double* __restrict a, double sc) {
   const __m256d vsc = _mm256_set1_pd(sc);
   for (std::int32_t i = i0; i < i1; ++i) {
     const __m256d vx = _mm256_set1_pd(pos[4 * i]), vy = _mm256_set1_pd(pos[4 * i + 1]),
@@ -203,12 +216,12 @@ __attribute__((target("avx2"))) void dilatation_avx2(std::int32_t i0, std::int32
     const std::int32_t q1 = off[i + 1];
     std::int32_t q = off[i];
     for (; q + 8 <= q1; q += 8) {
-      lo = dilatation4(pos, nbr, len, alive, q, 4, vx, vy, vz, vsc, lo);
-      hi = dilatation4(pos, nbr, len, alive, q + 4, 4, vx, vy, vz, vsc, hi);
+      lo = dilatation4(pos, nbr, len, alive, cur, q, 4, vx, vy, vz, vsc, lo);
+      hi = dilatation4(pos, nbr, len, alive, cur, q + 4, 4, vx, vy, vz, vsc, hi);
     }
     const int rest = q1 - q;
-    if (rest > 0) lo = dilatation4(pos, nbr, len, alive, q, std::min(rest, 4), vx, vy, vz, vsc, lo);
-    if (rest > 4) hi = dilatation4(pos, nbr, len, alive, q + 4, rest - 4, vx, vy, vz, vsc, hi);
+    if (rest > 0) lo = dilatation4(pos, nbr, len, alive, cur, q, std::min(rest, 4), vx, vy, vz, vsc, lo);
+    if (rest > 4) hi = dilatation4(pos, nbr, len, alive, cur, q + 4, rest - 4, vx, vy, vz, vsc, hi);
     pos[4 * i + 3] = a[i] * g[i] * reduce8_avx2(lo, hi);
   }
 }
@@ -216,11 +229,12 @@ __attribute__((target("avx2"))) void dilatation_avx2(std::int32_t i0, std::int32
 // Pass 2 on four bonds [q, q + n): s = alive t / max(|Y|, 1e-3 r), f += s Y.
 __attribute__((target("avx2"), always_inline)) inline void force4(const double* pos, const std::int32_t* nbr,
                                                                   const double* len, const double* alive,
-                                                                  const double* pb, std::int32_t q, int n,
+                                                                  const double* cur, const double* pb,
+                                                                  std::int32_t q, int n,
                                                                   __m256d vx, __m256d vy, __m256d vz, __m256d vat,
                                                                   __m256d vbi, __m256d& ax, __m256d& ay,
                                                                   __m256d& az) {
-  const Bond4 b = bond4(pos, nbr, len, q, n, vx, vy, vz, pb);
+  const Bond4 b = bond4(pos, nbr, len, q, n, vx, vy, vz, pb, cur);
   const __m256d tiny = _mm256_set1_pd(1e-3);
   const __m256d t =
       _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(vat, b.at), b.r), _mm256_mul_pd(_mm256_add_pd(vbi, b.bj), b.e));
@@ -233,8 +247,9 @@ __attribute__((target("avx2"), always_inline)) inline void force4(const double* 
 
 __attribute__((target("avx2"))) void force_avx2(std::int32_t i0, std::int32_t i1, const std::int32_t* __restrict off,
                                                 const std::int32_t* __restrict nbr, const double* __restrict len,
-                                                const double* __restrict alive, const double* __restrict pb,
-                                                const double* __restrict pos, double* __restrict fx,
+                                                const double* __restrict alive, const double* __restrict cur,
+                                                const double* __restrict pb, const double* __restrict pos,
+                                                double* __restrict fx,
                                                 double* __restrict fy, double* __restrict fz) {
   for (std::int32_t i = i0; i < i1; ++i) {
     const __m256d vx = _mm256_set1_pd(pos[4 * i]), vy = _mm256_set1_pd(pos[4 * i + 1]),
@@ -244,12 +259,12 @@ __attribute__((target("avx2"))) void force_avx2(std::int32_t i0, std::int32_t i1
     const std::int32_t q1 = off[i + 1];
     std::int32_t q = off[i];
     for (; q + 8 <= q1; q += 8) {
-      force4(pos, nbr, len, alive, pb, q, 4, vx, vy, vz, vat, vbi, xlo, ylo, zlo);
-      force4(pos, nbr, len, alive, pb, q + 4, 4, vx, vy, vz, vat, vbi, xhi, yhi, zhi);
+      force4(pos, nbr, len, alive, cur, pb, q, 4, vx, vy, vz, vat, vbi, xlo, ylo, zlo);
+      force4(pos, nbr, len, alive, cur, pb, q + 4, 4, vx, vy, vz, vat, vbi, xhi, yhi, zhi);
     }
     const int rest = q1 - q;
-    if (rest > 0) force4(pos, nbr, len, alive, pb, q, std::min(rest, 4), vx, vy, vz, vat, vbi, xlo, ylo, zlo);
-    if (rest > 4) force4(pos, nbr, len, alive, pb, q + 4, rest - 4, vx, vy, vz, vat, vbi, xhi, yhi, zhi);
+    if (rest > 0) force4(pos, nbr, len, alive, cur, pb, q, std::min(rest, 4), vx, vy, vz, vat, vbi, xlo, ylo, zlo);
+    if (rest > 4) force4(pos, nbr, len, alive, cur, pb, q + 4, rest - 4, vx, vy, vz, vat, vbi, xhi, yhi, zhi);
     fx[i] = reduce8_avx2(xlo, xhi);
     fy[i] = reduce8_avx2(ylo, yhi);
     fz[i] = reduce8_avx2(zlo, zhi);
@@ -292,7 +307,8 @@ struct Bond8 {
 __attribute__((target("avx512f"), always_inline)) inline Bond8 bond8(const double* pos, const std::int32_t* nbr,
                                                                       const double* len, std::int32_t q,
                                                                       std::int32_t q1, __m512d vx, __m512d vy,
-                                                                      __m512d vz, const double* pb = nullptr) {
+                                                                      __m512d vz, const double* pb = nullptr,
+                                                                      const double* cur = nullptr) {
   Bond8 b;
   const std::int32_t* j = nbr + q;
   std::int32_t pad[8];
@@ -308,8 +324,11 @@ __attribute__((target("avx512f"), always_inline)) inline Bond8 bond8(const doubl
   b.dx = _mm512_sub_pd(X, vx);
   b.dy = _mm512_sub_pd(Y, vy);
   b.dz = _mm512_sub_pd(Z, vz);
-  b.l = _mm512_sqrt_pd(
-      _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(b.dx, b.dx), _mm512_mul_pd(b.dy, b.dy)), _mm512_mul_pd(b.dz, b.dz)));
+  if (cur)  // |Y| stored by pass 1 (1 in lanes past q1, so that no lane divides by 0)
+    b.l = _mm512_mask_loadu_pd(_mm512_set1_pd(1.0), b.m, cur + q);
+  else
+    b.l = _mm512_sqrt_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(b.dx, b.dx), _mm512_mul_pd(b.dy, b.dy)),
+                                       _mm512_mul_pd(b.dz, b.dz)));
   b.r = _mm512_maskz_loadu_pd(b.m, len + q);
   b.e = _mm512_sub_pd(b.l, b.r);
   b.at = W;
@@ -321,7 +340,8 @@ __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::
                                                           const std::int32_t* __restrict off,
                                                           const std::int32_t* __restrict nbr,
                                                           const double* __restrict len, double* __restrict alive,
-                                                          double* __restrict pos, const double* __restrict g,
+                                                          double* __restrict cur, double* __restrict pos,
+                                                          const double* __restrict g,
                                                           const double* __restrict a, double sc) {
   const __m512d vsc = _mm512_set1_pd(sc);
   for (std::int32_t i = i0; i < i1; ++i) {
@@ -331,6 +351,7 @@ __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::
     const std::int32_t q1 = off[i + 1];
     for (std::int32_t q = off[i]; q < q1; q += 8) {
       const Bond8 b = bond8(pos, nbr, len, q, q1, vx, vy, vz);
+      _mm512_mask_storeu_pd(cur + q, b.m, b.l);
       const __mmask8 ok = _mm512_mask_cmp_pd_mask(b.m, b.e, _mm512_mul_pd(vsc, b.r), _CMP_LE_OQ);
       const __m512d w = _mm512_maskz_loadu_pd(ok, alive + q);
       _mm512_mask_storeu_pd(alive + q, b.m, w);
@@ -343,8 +364,9 @@ __attribute__((target("avx512f"))) void dilatation_avx512(std::int32_t i0, std::
 __attribute__((target("avx512f"))) void force_avx512(std::int32_t i0, std::int32_t i1,
                                                      const std::int32_t* __restrict off,
                                                      const std::int32_t* __restrict nbr, const double* __restrict len,
-                                                     const double* __restrict alive, const double* __restrict pb,
-                                                     const double* __restrict pos, double* __restrict fx,
+                                                     const double* __restrict alive, const double* __restrict cur,
+                                                     const double* __restrict pb, const double* __restrict pos,
+                                                     double* __restrict fx,
                                                      double* __restrict fy, double* __restrict fz) {
   const __m512d tiny = _mm512_set1_pd(1e-3);
   for (std::int32_t i = i0; i < i1; ++i) {
@@ -354,7 +376,7 @@ __attribute__((target("avx512f"))) void force_avx512(std::int32_t i0, std::int32
     __m512d ax = _mm512_setzero_pd(), ay = _mm512_setzero_pd(), az = _mm512_setzero_pd();
     const std::int32_t q1 = off[i + 1];
     for (std::int32_t q = off[i]; q < q1; q += 8) {
-      const Bond8 b = bond8(pos, nbr, len, q, q1, vx, vy, vz, pb);
+      const Bond8 b = bond8(pos, nbr, len, q, q1, vx, vy, vz, pb, cur);
       const __m512d t = _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(vat, b.at), b.r),
                                       _mm512_mul_pd(_mm512_add_pd(vbi, b.bj), b.e));
       const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(b.m, alive + q), t),
@@ -395,27 +417,28 @@ const char* isa_name(int k) { return k == kAvx512 ? "avx512" : k == kAvx2 ? "avx
 }  // namespace
 
 void dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr, const double* len,
-                double* alive, double* pos, const double* g, const double* a, double sc) {
+                double* alive, double* cur, double* pos, const double* g, const double* a, double sc) {
 #ifdef CRUMBLE_PD_HAVE_AVX512
   switch (current_isa()) {
-    case kAvx512: return dilatation_avx512(i0, i1, off, nbr, len, alive, pos, g, a, sc);
-    case kAvx2: return dilatation_avx2(i0, i1, off, nbr, len, alive, pos, g, a, sc);
+    case kAvx512: return dilatation_avx512(i0, i1, off, nbr, len, alive, cur, pos, g, a, sc);
+    case kAvx2: return dilatation_avx2(i0, i1, off, nbr, len, alive, cur, pos, g, a, sc);
     default: break;
   }
 #endif
-  dilatation_portable(i0, i1, off, nbr, len, alive, pos, g, a, sc);
+  dilatation_portable(i0, i1, off, nbr, len, alive, cur, pos, g, a, sc);
 }
 
 void force(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr, const double* len,
-           const double* alive, const double* b, const double* pos, double* fx, double* fy, double* fz) {
+           const double* alive, const double* cur, const double* b, const double* pos, double* fx, double* fy,
+           double* fz) {
 #ifdef CRUMBLE_PD_HAVE_AVX512
   switch (current_isa()) {
-    case kAvx512: return force_avx512(i0, i1, off, nbr, len, alive, b, pos, fx, fy, fz);
-    case kAvx2: return force_avx2(i0, i1, off, nbr, len, alive, b, pos, fx, fy, fz);
+    case kAvx512: return force_avx512(i0, i1, off, nbr, len, alive, cur, b, pos, fx, fy, fz);
+    case kAvx2: return force_avx2(i0, i1, off, nbr, len, alive, cur, b, pos, fx, fy, fz);
     default: break;
   }
 #endif
-  force_portable(i0, i1, off, nbr, len, alive, b, pos, fx, fy, fz);
+  force_portable(i0, i1, off, nbr, len, alive, cur, b, pos, fx, fy, fz);
 }
 
 const char* isa() { return isa_name(current_isa()); }

@@ -122,6 +122,7 @@ class PdSystem {
   std::vector<double> a_;             // V(3K − 5μ)/m_i
   std::vector<double> b_;             // 15μV/m_i
   std::vector<double> alive_;         // per bond: weight, or 0 once broken
+  std::vector<double> cur_;           // per bond: current length |Y| of the last force pass (scratch)
 };
 
 }  // namespace crumble::pd

@@ -293,16 +293,17 @@ TEST(PeridynamicsKernel, VariantsAndThreadsAgree) {
   auto run = [&](const std::string& isa, std::vector<double>& alive, std::vector<double>& p, std::vector<double>& f) {
     const std::int32_t N = static_cast<std::int32_t>(n);
     f.assign(3 * n, 0);
+    std::vector<double> cur(alive.size(), 0.0);
     if (isa == "portable") {
       pd::kernel::dilatation_portable(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(),
-                                      p.data(), g.data(), a.data(), 5e-4);
-      pd::kernel::force_portable(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), b.data(),
+                                      cur.data(), p.data(), g.data(), a.data(), 5e-4);
+      pd::kernel::force_portable(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(), b.data(),
                                  p.data(), f.data(), f.data() + n, f.data() + 2 * n);
     } else {
       pd::kernel::select_isa(isa);
-      pd::kernel::dilatation(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), p.data(),
-                             g.data(), a.data(), 5e-4);
-      pd::kernel::force(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), b.data(), p.data(),
+      pd::kernel::dilatation(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(),
+                             p.data(), g.data(), a.data(), 5e-4);
+      pd::kernel::force(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(), b.data(), p.data(),
                         f.data(), f.data() + n, f.data() + 2 * n);
       pd::kernel::select_isa("");
     }
