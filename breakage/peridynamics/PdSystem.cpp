@@ -55,6 +55,7 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
   for (auto* v : {&vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &bx_, &by_, &bz_, &g_, &a_, &b_}) v->assign(n, 0.0);
   free_.assign(n, 1.0);
   alive_ = L_.weight;
+  cur_.assign(alive_.size(), 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     // Zhu & Zhao 2019 eq. 3: weighted volume m = Σ ω |ξ|² V_j (ω = 1; V_j with its partial-volume weight)
     double m = 0;
@@ -66,9 +67,6 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
       b_[i] = 15.0 * mat_.shear * V / m;
     }
   }
-  kb_.resize(L_.neighbours.size());
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) kb_[q] = b_[i] + b_[L_.neighbours[q]];
 }
 
 void PdSystem::fix(const std::vector<std::int32_t>& pts) {
@@ -126,8 +124,8 @@ void PdSystem::compute_forces(int threads) {
   const double* len = L_.length.data();
   threads = std::max(1, threads);
   if (threads == 1) {
-    kernel::dilatation(0, n, off, nbr, len, alive_.data(), pos_.data(), g_.data(), a_.data(), sc_);
-    kernel::force(0, n, off, nbr, len, alive_.data(), kb_.data(), pos_.data(), fx_.data(), fy_.data(), fz_.data());
+    kernel::dilatation(0, n, off, nbr, len, alive_.data(), cur_.data(), pos_.data(), g_.data(), a_.data(), sc_);
+    kernel::force(0, n, off, nbr, len, alive_.data(), cur_.data(), b_.data(), pos_.data(), fx_.data(), fy_.data(), fz_.data());
     return;
   }
   // Blocks of rows per thread; each row is computed exactly as in the serial call.
@@ -137,11 +135,11 @@ void PdSystem::compute_forces(int threads) {
   {
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), pos_.data(), g_.data(),
+      kernel::dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), cur_.data(), pos_.data(), g_.data(),
                          a_.data(), sc_);
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), kb_.data(), pos_.data(),
+      kernel::force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), cur_.data(), b_.data(), pos_.data(),
                     fx_.data(), fy_.data(), fz_.data());
   }
 }

@@ -121,8 +121,8 @@ class PdSystem {
   std::vector<double> g_;             // 3V/m_i (eq. 4)
   std::vector<double> a_;             // V(3K − 5μ)/m_i
   std::vector<double> b_;             // 15μV/m_i
-  std::vector<double> kb_;            // per bond: b_i + b_j
   std::vector<double> alive_;         // per bond: weight, or 0 once broken
+  std::vector<double> cur_;           // per bond: current length |Y| of the last force pass (scratch)
 };
 
 }  // namespace crumble::pd
