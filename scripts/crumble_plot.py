@@ -729,7 +729,17 @@ def plot_sweep(F, d, title):
         ax.annotate(label + (" (reference)" if ref else ""), (cost, ey(err)), textcoords="offset points",
                     xytext=(6, 4), fontsize=8)
     missing = [p[4] for p in pts if not math.isfinite(p[1])]
-    if missing:
+    # The reference that did not finish leaves every error empty: say so, not "never reached".
+    failed_ref = [r for r in rows if str(r["reference"]).strip() in ("1", "1.0") and r["status"] != "ok"]
+    if failed_ref:
+        r = failed_ref[0]
+        label = ", ".join(f"{r[p]:g}" if isinstance(r[p], float) else str(r[p]) for p in params) or str(r["folder"])
+        ax.text(0.5, 0.5, f"the reference setting ({label}) did not finish ({r['status']}):\nno errors to compare; "
+                "see pareto.md\nsettings that ran: " + ", ".join(f"{p[4]} ({p[0]:.3g} s)" for p in pts),
+                transform=ax.transAxes, fontsize=9, color="0.25", ha="center", va="center")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    elif missing:
         ax.text(0.02, 0.02, "no finite error (a metric the reference has was never reached): " + ", ".join(missing),
                 transform=ax.transAxes, fontsize=8, color="0.35", va="bottom")
     costs = [p[0] for p in pts if p[0] > 0 and math.isfinite(p[1])]

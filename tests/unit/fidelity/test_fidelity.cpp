@@ -132,3 +132,53 @@ TEST(Fidelity, EveryPresetValueIsAcceptedByItsImplementation) {
     }
   }
 }
+
+TEST(Fidelity, OdeIterationsAreWrittenOnlyWhereTheScenarioLeavesThemOut) {
+  // The ODE row (studies/ode_iterations.json): engine.solver_iterations, the same path as
+  // Bullet's knob, so it must go to ODE scenarios only, and never over a value the scenario or
+  // a --set gives.
+  const FidelityKnob* ode = nullptr;
+  const FidelityKnob* bullet = nullptr;
+  for (const auto& k : fidelity_knobs()) {
+    if (k.implementation == "ode" && k.path == "engine.solver_iterations") ode = &k;
+    if (k.implementation == "bullet" && k.path == "engine.solver_iterations") bullet = &k;
+  }
+  ASSERT_NE(ode, nullptr);
+  ASSERT_NE(bullet, nullptr);
+  const Json rigid = load_scenario_file(kSource + "/scenarios/oedometer_rigid_quick.json");
+  ASSERT_TRUE(rigid["engine"].contains("solver_iterations"));
+  for (const auto& preset : fidelity_presets()) {
+    SCOPED_TRACE(preset);
+    // ODE without its own iterations: the preset's ODE value, as a note.
+    Json doc = rigid;
+    doc["engine"]["type"] = "ode";
+    doc["engine"].erase("solver_iterations");
+    doc["fidelity"] = preset;
+    const Scenario sc = build_scenario(doc, BuildOptions{});
+    EXPECT_EQ(sc.effective["engine"]["solver_iterations"], fidelity_value(*ode, preset));
+    std::size_t notes = 0;
+    for (const auto& n : sc.notes)
+      notes += n.find("engine.solver_iterations=" + fidelity_value(*ode, preset).dump()) != std::string::npos;
+    EXPECT_EQ(notes, 1u);
+    // The scenario's own value (300 in oedometer_rigid_quick) wins, with no note.
+    Json fixed = rigid;
+    fixed["engine"]["type"] = "ode";
+    fixed["fidelity"] = preset;
+    const Scenario kept = build_scenario(fixed, BuildOptions{});
+    EXPECT_EQ(kept.effective["engine"]["solver_iterations"].get<int>(), 300);
+    for (const auto& n : kept.notes) EXPECT_EQ(n.find("solver_iterations"), std::string::npos) << n;
+    // A --set wins too, also when it is what selects ODE.
+    BuildOptions set;
+    set.overrides = {"engine.type=ode", "engine.solver_iterations=77"};
+    Json bare = rigid;
+    bare["engine"].erase("solver_iterations");
+    bare["fidelity"] = preset;
+    EXPECT_EQ(build_scenario(bare, set).effective["engine"]["solver_iterations"].get<int>(), 77);
+    BuildOptions only_type;
+    only_type.overrides = {"engine.type=ode"};
+    EXPECT_EQ(build_scenario(bare, only_type).effective["engine"]["solver_iterations"], fidelity_value(*ode, preset));
+    // The same file on Bullet gets Bullet's value, not ODE's.
+    EXPECT_EQ(build_scenario(bare, BuildOptions{}).effective["engine"]["solver_iterations"],
+              fidelity_value(*bullet, preset));
+  }
+}
