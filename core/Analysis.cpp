@@ -38,6 +38,22 @@ double semilog_slope(const std::vector<double>& x, const std::vector<double>& y)
   return slope_against_log10(x, y, [](double v) { return v; });
 }
 
+double value_at_level(const std::vector<double>& x, const std::vector<double>& y, double level, double tolerance) {
+  const std::size_t n = std::min(x.size(), y.size());
+  std::size_t best = n;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
+    if (x[i] >= level) {
+      if (i == 0 || !std::isfinite(x[i - 1]) || !std::isfinite(y[i - 1]) || !(x[i - 1] < level)) return y[i];
+      const double t = (level - x[i - 1]) / (x[i] - x[i - 1]);
+      return y[i - 1] + t * (y[i] - y[i - 1]);
+    }
+    if (best == n || x[i] > x[best]) best = i;
+  }
+  if (best < n && x[best] >= level * (1 - tolerance)) return y[best];
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 double PowerLaw::operator()(double x) const { return coefficient * std::pow(x, exponent); }
 
 PowerLaw fit_power_law(const std::vector<double>& x, const std::vector<double>& y) {

@@ -36,6 +36,14 @@ struct PowerLaw {
 };
 PowerLaw fit_power_law(const std::vector<double>& x, const std::vector<double>& y);
 
+// y where x first reaches `level`, interpolated linearly between that sample and the one
+// before it (a series sampled every 100 steps otherwise reports its value at a sample well
+// past the level). A series whose largest x falls short of the level by at most
+// `tolerance`·level (a ramp whose last sample reads 4.9999 MPa for 5 MPa) gives y at that
+// largest x. NaN when the level is not reached.
+double value_at_level(const std::vector<double>& x, const std::vector<double>& y, double level,
+                      double tolerance = 1e-4);
+
 // ---- Particle size distribution by mass ----
 
 // Percent (0–100) of the total mass passing each sieve: grains with size <= sieve. Sizes in

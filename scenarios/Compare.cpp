@@ -319,7 +319,7 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
     m << "\n";
     for (std::size_t i = 0; i < notes.size(); ++i) m << "(" << i + 1 << ") " << notes[i] << "\n";
   }
-  m << "\n`e` = void ratio (at the first sample whose platen stress or axial strain reaches the level; "
+  m << "\n`e` = void ratio (where the platen stress or axial strain first reaches the level, interpolated between samples; "
        "— = not reached), d50 and fines from the final particle size distribution by mass (fines: removed "
        "fragments and grains finer than `fines_size_m`), `wall s` the run's wall time, then where it went "
        "(summary.json `time_breakdown_s`). Every figure comes from the combination's summary.json; "

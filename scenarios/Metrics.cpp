@@ -144,8 +144,10 @@ Metric level_metric(double level, bool stress) {
   Metric m;
   m.name = stress ? "void_ratio_at_stress_" + fmt_num(level) : "void_ratio_at_strain_" + fmt_num(level);
   m.unit = "1";
-  m.description = stress ? "void ratio at the first sample whose platen stress reaches " + fmt_num(level) + " Pa"
-                         : "void ratio at the first sample whose axial strain reaches " + fmt_num(level);
+  m.description = stress ? "void ratio where the platen stress first reaches " + fmt_num(level) +
+                               " Pa (interpolated between the series samples around it)"
+                         : "void ratio where the axial strain first reaches " + fmt_num(level) +
+                               " (interpolated between the series samples around it)";
   m.value = &void_ratio_at_level;
   return m;
 }

@@ -166,30 +166,30 @@ class CompressionRecorder : public Observer {
 };
 
 // Figures `crumble compare` tabulates, in summary.json: the void ratio at each reported
-// stress or strain level (output.psd_at_stress / psd_at_strain: the first series sample that
-// reaches it, as psd.csv; read from the finished series.csv so a resumed run covers its whole
-// history), and d50 and the fines fraction of the final size distribution by mass.
+// stress or strain level (output.psd_at_stress / psd_at_strain: interpolated between the two
+// series samples around the first crossing, core/Analysis.h value_at_level; read from the
+// finished series.csv so a resumed run covers its whole history), and d50 and the fines fraction of the final size distribution by mass.
 class ReportRecorder : public Observer {
  public:
   ReportRecorder(std::string dir, std::vector<double> stresses, std::vector<double> strains, double fines_size)
       : dir_(std::move(dir)), stresses_(std::move(stresses)), strains_(std::move(strains)), fines_size_(fines_size) {}
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
     const auto rows = read_csv(dir_ + "/series.csv");
-    auto first_reaching = [&](std::size_t column, double level, double* e) {
-      for (std::size_t i = 1; i < rows.size(); ++i) {
-        if (rows[i].size() < 8) continue;
-        if (std::atof(rows[i][column].c_str()) >= level) {
-          *e = std::atof(rows[i][6].c_str());
-          return true;
-        }
-      }
-      return false;
-    };
-    double e = 0;
-    for (double s : stresses_)
-      if (first_reaching(3, s, &e)) sum.extra[void_ratio_stress_key(s)] = e;
-    for (double s : strains_)
-      if (first_reaching(5, s, &e)) sum.extra[void_ratio_strain_key(s)] = e;
+    std::vector<double> stress, strain, voids;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      if (rows[i].size() < 8) continue;
+      stress.push_back(std::atof(rows[i][3].c_str()));
+      strain.push_back(std::atof(rows[i][5].c_str()));
+      voids.push_back(std::atof(rows[i][6].c_str()));
+    }
+    for (double s : stresses_) {
+      const double e = value_at_level(stress, voids, s);
+      if (std::isfinite(e)) sum.extra[void_ratio_stress_key(s)] = e;
+    }
+    for (double s : strains_) {
+      const double e = value_at_level(strain, voids, s);
+      if (std::isfinite(e)) sum.extra[void_ratio_strain_key(s)] = e;
+    }
     // Final PSD by mass: removed fines count at size 0 (Harmon et al. 2020 §3.4: removed
     // particles stay in the PSD).
     std::vector<double> sizes, masses;

@@ -19,6 +19,17 @@ TEST(Analysis, LogLogSlopeOfAPowerLaw) {
   EXPECT_TRUE(std::isnan(loglog_slope({1.0}, {1.0})));
 }
 
+TEST(Analysis, ValueAtLevelInterpolatesAroundTheFirstCrossing) {
+  // Samples at 0, 3.2 and 6.4 MPa: e at 5 MPa lies between the last two (not e at 6.4 MPa).
+  const std::vector<double> s{0, 3.2e6, 6.4e6, 4e6}, e{0.9, 0.8, 0.7, 0.75};
+  EXPECT_NEAR(value_at_level(s, e, 5e6), 0.8 - 0.1 * (1.8 / 3.2), 1e-12);
+  EXPECT_DOUBLE_EQ(value_at_level(s, e, 0.0), 0.9);  // reached at the first sample
+  EXPECT_TRUE(std::isnan(value_at_level(s, e, 7e6)));
+  // A ramp whose last sample reads a hair below its end still reaches it (1e-4 relative).
+  EXPECT_DOUBLE_EQ(value_at_level({1e6, 4.9999e6}, {0.9, 0.8}, 5e6), 0.8);
+  EXPECT_TRUE(std::isnan(value_at_level({1e6, 4.99e6}, {0.9, 0.8}, 5e6)));
+}
+
 TEST(Analysis, PowerLawFitRecoversCoefficientAndExponent) {
   // y = 0.0123 · x^1.37 exactly; points with x <= 0 or y <= 0 are left out.
   std::vector<double> x{-1.0, 0.0, 720, 1500, 3000, 9000, 27400}, y;
