@@ -37,6 +37,9 @@
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/Tools.h"
 #include "scenarios/Writers.h"
+#if CRUMBLE_MPI
+#include "parallel/MpiAnalyses.h"
+#endif
 
 namespace fs = std::filesystem;
 using namespace crumble;
@@ -48,6 +51,10 @@ const char* kExitStatus =
     "Exit status: 0 success; 2 bad input (the message names the file, the JSON path and what was expected; "
     "also an --out folder that holds another run); 1 a failure while running; 130 (SIGINT, Ctrl-C) or 143 "
     "(SIGTERM): the run was interrupted, every output was written (\"interrupted\": true in summary.json).";
+
+// Under mpirun (a build with CRUMBLE_MPI): the breakage analyses of `crumble run` over the
+// ranks (parallel/MpiAnalyses.h); unset otherwise.
+decltype(RunRequest::analysis_executor) g_analysis_executor;
 
 // `crumble run`: the shared run pipeline (scenarios/RunPipeline.h).
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,
@@ -63,6 +70,7 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   req.resume = resume;
   req.force = force;
   req.plots = true;
+  req.analysis_executor = g_analysis_executor;
   const RunResult r = run_pipeline(req);
   if (r.status == 1) std::cerr << "crumble: failed: " << r.reason << "\n";
   return r.status;
@@ -192,8 +200,15 @@ int cmd_list() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::string version = std::string("crumble ") + CRUMBLE_VERSION;
+#if CRUMBLE_MPI
+  // Ranks >= 1 only serve breakage analyses to rank 0, which parses the command line.
+  mpi::Session mpi(&argc, &argv);
+  if (mpi.worker()) return mpi.serve();
+  version += " (built with MPI" + (mpi.active() ? ": " + mpi.describe() + ", analyses of `run` on every rank" : std::string()) + ")";
+#endif
   CLI::App app{"crumble — particle breakage in granular materials (Zhu & Zhao 2019, Harmon et al. 2020)"};
-  app.set_version_flag("--version", std::string("crumble ") + CRUMBLE_VERSION);
+  app.set_version_flag("--version", version);
   app.footer(kExitStatus);
   app.require_subcommand(1);
   std::vector<std::string> plugins;
@@ -321,6 +336,10 @@ int main(int argc, char** argv) {
 
   try {
     for (const auto& p : plugins) load_plugin(p);
+#if CRUMBLE_MPI
+    if (mpi.size() > 1)
+      g_analysis_executor = [&](const Json& doc, const Scenario& sc) { return mpi.executor(doc, sc, plugins); };
+#endif
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
     if (*swp) return cmd_sweep(file, out, sweep_req, study, swp_jobs->count() > 0);
