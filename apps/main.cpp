@@ -337,6 +337,11 @@ int main(int argc, char** argv) {
   try {
     for (const auto& p : plugins) load_plugin(p);
 #if CRUMBLE_MPI
+    // Only `run` spreads its analyses; compare and sweep fork runs of their own.
+    if (mpi.size() > 1 && (*cmp || *swp))
+      throw InputError(std::string(*cmp ? "compare" : "sweep") +
+                       " does not run under mpirun (only `crumble run` spreads its breakage analyses over MPI "
+                       "ranks); run it without mpirun, with --jobs N");
     if (mpi.size() > 1)
       g_analysis_executor = [&](const Json& doc, const Scenario& sc) { return mpi.executor(doc, sc, plugins); };
 #endif

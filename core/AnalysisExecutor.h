@@ -32,6 +32,13 @@ class AnalysisExecutor {
                        std::vector<std::string>& errors) = 0;
   // How many processes run analyses (summary.json "analysis_ranks").
   virtual int ranks() const = 0;
+  // Per rank so far: analyses run and the sum of their wall times (s), to see how the work
+  // was shared (summary.json "analyses_per_rank", "analysis_seconds_per_rank").
+  struct RankLoad {
+    long analyses = 0;
+    double seconds = 0;
+  };
+  virtual std::vector<RankLoad> load() const = 0;
 };
 
 }  // namespace crumble

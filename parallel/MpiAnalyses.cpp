@@ -358,7 +358,7 @@ bool probe(int source, int tag, MPI_Status* st) {
 
 class MpiExecutor : public AnalysisExecutor {
  public:
-  explicit MpiExecutor(int size) : size_(size), outstanding_(size, 0), sent_(size) {}
+  explicit MpiExecutor(int size) : size_(size), outstanding_(size, 0), sent_(size), load_(size) {}
   ~MpiExecutor() override {
     // An analyse() left by an exception: collect what is still on its way, so that every
     // worker is idle (waiting for stop) and no send is left open.
@@ -376,6 +376,7 @@ class MpiExecutor : public AnalysisExecutor {
   }
 
   int ranks() const override { return size_; }
+  std::vector<RankLoad> load() const override { return load_; }
 
   void analyse(const BreakageModel& model, const std::vector<Material>& materials, std::span<const AnalysisJob> jobs,
                std::vector<BreakageAnalysis>& results, std::vector<std::string>& errors) override {
@@ -416,8 +417,11 @@ class MpiExecutor : public AnalysisExecutor {
         Reader r(buf);
         const auto k = static_cast<std::size_t>(r.get<std::uint64_t>());
         if (k >= n) throw std::runtime_error("MPI: a worker answered a job that was not sent");
-        if (r.get<std::uint8_t>()) results[k] = get_analysis(r);
-        else errors[k] = r.str() + " (on MPI rank " + std::to_string(st.MPI_SOURCE) + ")";
+        if (r.get<std::uint8_t>()) {
+          results[k] = get_analysis(r);
+          ++load_[st.MPI_SOURCE].analyses;
+          load_[st.MPI_SOURCE].seconds += results[k].wall_ms * 1e-3;
+        } else errors[k] = r.str() + " (on MPI rank " + std::to_string(st.MPI_SOURCE) + ")";
         ++done;
         if (next < n) dispatch(st.MPI_SOURCE);
         sends_.test();
@@ -429,6 +433,8 @@ class MpiExecutor : public AnalysisExecutor {
         const Grain& g = *jobs[k].grain;
         try {
           results[k] = model.analyse(g, materials.at(static_cast<std::size_t>(jobs[k].material)), jobs[k].contacts);
+          ++load_[0].analyses;
+          load_[0].seconds += results[k].wall_ms * 1e-3;
         } catch (const std::exception& e) {
           errors[k] = e.what();
         }
@@ -461,6 +467,7 @@ class MpiExecutor : public AnalysisExecutor {
   std::unordered_map<const Shape*, std::pair<std::weak_ptr<const Shape>, std::uint64_t>> ids_;
   std::uint64_t next_shape_ = 0;
   PendingSends sends_;
+  std::vector<RankLoad> load_;
 };
 
 // ---------------------------------------------------------------- workers

@@ -110,7 +110,13 @@ TEST(Mpi, TwoRanksGiveTheOneThreadResults) {
   EXPECT_GE(sa.value("breakage_events", 0), 5);
   // Rank 1 ran analyses: the lattices it built are not counted by rank 0.
   EXPECT_LT(sb["representations_built"].value("pd_lattices", 0), sa["representations_built"].value("pd_lattices", 0));
-  for (const char* k : {"wall_seconds", "time_breakdown_s", "representations_built", "analysis_ranks"}) {
+  // Both ranks ran analyses, and every analysis ran once.
+  ASSERT_EQ(sb["analyses_per_rank"].size(), 2u);
+  EXPECT_GE(sb["analyses_per_rank"][0].get<long>(), 1);
+  EXPECT_GE(sb["analyses_per_rank"][1].get<long>(), 1);
+  EXPECT_EQ(sb["analyses_per_rank"][0].get<long>() + sb["analyses_per_rank"][1].get<long>(), sa.value("analyses", 0L));
+  for (const char* k : {"wall_seconds", "time_breakdown_s", "representations_built", "analysis_ranks",
+                        "analyses_per_rank", "analysis_seconds_per_rank"}) {
     sa.erase(k);
     sb.erase(k);
   }
