@@ -129,6 +129,30 @@ TEST(Mpi, TwoRanksGiveTheOneThreadResults) {
   }
 }
 
+// The other method: Harmon et al. 2020's 2D oedometer (LS-DEM, average-stress criterion, planar
+// level-set splitting), so cutting planes travel back and level-set grids travel out.
+TEST(Mpi, TwoRanksGiveTheOneThreadResultsForTheStressCriterionIn2D) {
+  SKIP_WITHOUT_MPI();
+  const std::string file = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_harmon_2d_quick.json";
+  const fs::path dir = fs::path(scenario_file("mpi", "unused", "")).parent_path();
+  const fs::path a = dir / "threads1", b = dir / "ranks2";
+  fs::remove_all(a);
+  fs::remove_all(b);
+  const std::string args = " --threads 1 --quiet --set output.plots=false --set simulation.max_steps=6000";
+  const Result ra = shell(std::string(CRUMBLE_BINARY) + " run " + file + " --out " + a.string() + args);
+  ASSERT_EQ(ra.status, 0) << ra.output;
+  const Result rb = shell(mpirun(2) + " run " + file + " --out " + b.string() + args);
+  ASSERT_EQ(rb.status, 0) << rb.output;
+  const Json sa = Json::parse(slurp(a / "summary.json")), sb = Json::parse(slurp(b / "summary.json"));
+  EXPECT_GE(sa.value("breakage_events", 0), 1);
+  ASSERT_EQ(sb["analyses_per_rank"].size(), 2u);
+  EXPECT_GE(sb["analyses_per_rank"][1].get<long>(), 1);
+  EXPECT_EQ(sa.value("breakage_events", -1), sb.value("breakage_events", -2));
+  EXPECT_EQ(events_without_wall(a / "events.csv"), events_without_wall(b / "events.csv"));
+  for (const char* f : {"series.csv", "checkpoint.json"})
+    EXPECT_TRUE(slurp(a / f) == slurp(b / f)) << f << " differs between the 1-thread and the 2-rank run";
+}
+
 TEST(Mpi, BadInputOnRankZeroEndsEveryRank) {
   SKIP_WITHOUT_MPI();
   const std::string file = scenario_file("mpi", "small.json", kScenario);
