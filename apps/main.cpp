@@ -38,6 +38,9 @@
 #include "scenarios/Stages.h"
 #include "scenarios/Tools.h"
 #include "scenarios/Writers.h"
+#if CRUMBLE_MPI
+#include "parallel/MpiAnalyses.h"
+#endif
 
 namespace fs = std::filesystem;
 using namespace crumble;
@@ -49,6 +52,10 @@ const char* kExitStatus =
     "Exit status: 0 success; 2 bad input (the message names the file, the JSON path and what was expected; "
     "also an --out folder that holds another run); 1 a failure while running; 130 (SIGINT, Ctrl-C) or 143 "
     "(SIGTERM): the run was interrupted, every output was written (\"interrupted\": true in summary.json).";
+
+// Under mpirun (a build with CRUMBLE_MPI): the breakage analyses of `crumble run` over the
+// ranks (parallel/MpiAnalyses.h); unset otherwise.
+decltype(RunRequest::analysis_executor) g_analysis_executor;
 
 // `crumble run`: the shared run pipeline (scenarios/RunPipeline.h).
 int cmd_run(const std::string& file, const std::string& out, const std::vector<std::string>& sets,
@@ -64,6 +71,7 @@ int cmd_run(const std::string& file, const std::string& out, const std::vector<s
   req.resume = resume;
   req.force = force;
   req.plots = true;
+  req.analysis_executor = g_analysis_executor;
   const RunResult r = run_pipeline(req);
   if (r.status == 1) std::cerr << "crumble: failed: " << r.reason << "\n";
   return r.status;
@@ -193,8 +201,15 @@ int cmd_list() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::string version = std::string("crumble ") + CRUMBLE_VERSION;
+#if CRUMBLE_MPI
+  // Ranks >= 1 only serve breakage analyses to rank 0, which parses the command line.
+  mpi::Session mpi(&argc, &argv);
+  if (mpi.worker()) return mpi.serve();
+  version += " (built with MPI" + (mpi.active() ? ": " + mpi.describe() + ", analyses of `run` on every rank" : std::string()) + ")";
+#endif
   CLI::App app{"crumble — particle breakage in granular materials (Zhu & Zhao 2019, Harmon et al. 2020)"};
-  app.set_version_flag("--version", std::string("crumble ") + CRUMBLE_VERSION);
+  app.set_version_flag("--version", version);
   app.footer(kExitStatus);
   app.require_subcommand(1);
   std::vector<std::string> plugins;
@@ -335,6 +350,15 @@ int main(int argc, char** argv) {
 
   try {
     for (const auto& p : plugins) load_plugin(p);
+#if CRUMBLE_MPI
+    // Only `run` spreads its analyses; compare and sweep fork runs of their own.
+    if (mpi.size() > 1 && (*cmp || *swp))
+      throw InputError(std::string(*cmp ? "compare" : "sweep") +
+                       " does not run under mpirun (only `crumble run` spreads its breakage analyses over MPI "
+                       "ranks); run it without mpirun, with --jobs N");
+    if (mpi.size() > 1)
+      g_analysis_executor = [&](const Json& doc, const Scenario& sc) { return mpi.executor(doc, sc, plugins); };
+#endif
     if (*run) return cmd_run(file, out, sets, seed, threads, quiet, resume, force);
     if (*cmp) return cmd_compare(file, out, vary, sets, seed, threads, jobs, quiet, force);
     if (*swp) return cmd_sweep(file, out, sweep_req, study, swp_jobs->count() > 0);

@@ -51,6 +51,15 @@ if(CRUMBLE_WITH_CGAL)
   crumble_require(CGAL_FOUND libcgal-dev "CGAL")
 endif()
 
+if(CRUMBLE_MPI)
+  find_package(MPI QUIET COMPONENTS CXX)
+  if(NOT MPI_CXX_FOUND)
+    message(FATAL_ERROR "crumble: CRUMBLE_MPI=ON but no MPI C++ development files were found. Install the Debian "
+                        "package: apt-get install libopenmpi-dev (or run scripts/setup.sh --mpi), or configure "
+                        "with -DCRUMBLE_MPI=OFF (the default)")
+  endif()
+endif()
+
 if(CRUMBLE_BUILD_TESTS)
   find_package(GTest QUIET)
   crumble_require(GTest_FOUND libgtest-dev "GoogleTest")

@@ -343,46 +343,50 @@ void Simulation::check_breakage(const RunState& st) {
 
   // Analyses and fragment building of different grains are independent: one grain per
   // task. Results are stored by candidate index so the outcome does not depend on the
-  // number of threads.
+  // number of threads (or ranks, with an executor).
   t0 = Clock::now();
   const long n = static_cast<long>(candidates.size());
   std::vector<BreakageAnalysis> results(n);
   std::vector<FragmentResult> frags(n);
   std::vector<std::string> errors(n);
-  // Each task times its analysis and its fragment building; the section's wall time is
-  // split between `analyses` and `fragments` in proportion (exact with one thread).
-  std::vector<double> t_analyse(n, 0.0), t_build(n, 0.0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(std::max(1, settings_.threads))
-  for (long k = 0; k < n; ++k) {
-    const std::size_t i = candidates[k];
-    try {
-      const Grain& g = grains_[i];
-      auto tk = Clock::now();
-      results[k] = model_->analyse(g, ctx_.materials[g.material], on[i]);
-      t_analyse[k] = seconds_since(tk);
-      if (results[k].broken && results[k].fracture) {
-        if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
-        tk = Clock::now();
-        frags[k] = builder_->build(*g.shape, *results[k].fracture);
-        t_build[k] = seconds_since(tk);
-      }
-    } catch (const std::exception& e) {
-      errors[k] = "grain " + std::to_string(grains_[i].id) + " (" + grains_[i].shape->describe() + "): " + e.what();
-    }
-  }
-  for (const auto& e : errors)
-    if (!e.empty()) throw std::runtime_error("breakage analysis failed for " + e);
-  {
-    const double wall = seconds_since(t0);
-    double a = 0, b = 0;
+  const int threads = std::max(1, settings_.threads);
+  if (executor_) {
+    std::vector<AnalysisJob> jobs(n);
     for (long k = 0; k < n; ++k) {
-      a += t_analyse[k];
-      b += t_build[k];
+      const std::size_t i = candidates[k];
+      jobs[k] = {&grains_[i], grains_[i].material, on[i]};
     }
-    const double build_share = a + b > 0 ? b / (a + b) : 0.0;
-    timings_.analyses += wall * (1 - build_share);
-    timings_.fragments += wall * build_share;
+    executor_->analyse(*model_, ctx_.materials, jobs, results, errors);
+  } else {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (long k = 0; k < n; ++k) {
+      const Grain& g = grains_[candidates[k]];
+      try {
+        results[k] = model_->analyse(g, ctx_.materials[g.material], on[candidates[k]]);
+      } catch (const std::exception& e) {
+        errors[k] = e.what();
+      }
+    }
   }
+  timings_.analyses += seconds_since(t0);
+  t0 = Clock::now();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (long k = 0; k < n; ++k) {
+    if (!errors[k].empty() || !results[k].broken || !results[k].fracture) continue;
+    try {
+      if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
+      frags[k] = builder_->build(*grains_[candidates[k]].shape, *results[k].fracture);
+    } catch (const std::exception& e) {
+      errors[k] = e.what();
+    }
+  }
+  for (long k = 0; k < n; ++k)
+    if (!errors[k].empty()) {
+      const Grain& g = grains_[candidates[k]];
+      throw std::runtime_error("breakage analysis failed for grain " + std::to_string(g.id) + " (" +
+                               g.shape->describe() + "): " + errors[k]);
+    }
+  timings_.fragments += seconds_since(t0);
 
   t0 = Clock::now();
   std::vector<char> remove(grains_.size(), 0);

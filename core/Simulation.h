@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "core/AnalysisExecutor.h"
 #include "core/BreakageModel.h"
 #include "core/Engine.h"
 #include "core/FragmentBuilder.h"
@@ -91,6 +92,10 @@ class Simulation {
   // A flag (e.g. set by SIGINT/SIGTERM) that ends the loop after the current step; the run
   // then finishes normally (outputs, checkpoint) and reports itself as interrupted.
   void set_stop_flag(const std::atomic<bool>* flag) { stop_ = flag; }
+  // Runs the breakage analyses elsewhere (core/AnalysisExecutor.h, e.g. MPI ranks); null:
+  // on this process's threads (SimulationSettings::threads). Fragments are built here.
+  void set_analysis_executor(std::shared_ptr<AnalysisExecutor> e) { executor_ = std::move(e); }
+  const AnalysisExecutor* analysis_executor() const { return executor_.get(); }
 
   using Progress = std::function<void(const RunState&, double fraction)>;
   RunSummary run(const Progress& progress = {});
@@ -131,6 +136,7 @@ class Simulation {
   std::unique_ptr<Engine> engine_;
   std::unique_ptr<BreakageModel> model_;
   std::unique_ptr<FragmentBuilder> builder_;
+  std::shared_ptr<AnalysisExecutor> executor_;
   EngineContext ctx_;
   SimulationSettings settings_;
   Loading loading_;

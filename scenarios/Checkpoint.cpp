@@ -52,6 +52,55 @@ Json shape_to_json(const Shape& s) {
   return j;
 }
 
+Json shape_saved_json(const Shape& s) {
+  Json sj = shape_to_json(s);
+  // What the factories would compute again from the (centred) source, as the run had
+  // it: rebuilding recomputes the mass properties from centred vertices and differs in
+  // the last bits, which a bit-identical resume cannot afford (Shape::restored).
+  const MassProperties& mp = s.mass_properties();
+  Json I = Json::array();
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) I.push_back(mp.inertia(a, b));
+  const Aabb bb = s.bounds();
+  sj["saved"] = {{"volume", mp.volume},
+                 {"inertia", I},
+                 {"bounds", {bb.lo.x, bb.lo.y, bb.lo.z, bb.hi.x, bb.hi.y, bb.hi.z}},
+                 {"recentring", vec(s.recentring())}};
+  return sj;
+}
+
+Shape::Ptr shape_from_saved_config(const Config& sc, int dim) {
+  Shape::Ptr sh = shape_from_config(sc, dim);
+  if (!sc.has("saved")) return sh;
+  const Config sv = sc.child("saved");
+  MassProperties mp;
+  mp.volume = sv.positive("volume");
+  const auto I = sv.numbers("inertia");
+  if (I.size() != 9) sv.fail("inertia", "expected the 9 components of the inertia tensor, row by row");
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) mp.inertia(a, b) = I[3 * a + b];
+  const auto B = sv.numbers("bounds");
+  if (B.size() != 6) sv.fail("bounds", "expected [lo x, lo y, lo z, hi x, hi y, hi z]");
+  const Aabb bounds{{B[0], B[1], B[2]}, {B[3], B[4], B[5]}};
+  const Vec3 rc = sv.vec3("recentring", {});
+  // The saved source as written (already checked by shape_from_config).
+  std::vector<Vec3> poly;
+  TriMesh mesh;
+  const Json& d = sc.doc();
+  if (sh->kind() == ShapeKind::Polygon)
+    for (const auto& v : d.at("vertices")) poly.push_back({v[0].get<double>(), v[1].get<double>(), 0.0});
+  if (sh->kind() == ShapeKind::Polyhedron && d.contains("vertices") && d.contains("triangles")) {
+    for (const auto& v : d.at("vertices")) mesh.vertices.push_back({v[0].get<double>(), v[1].get<double>(), v[2].get<double>()});
+    for (const auto& t : d.at("triangles")) mesh.triangles.push_back({t[0].get<int>(), t[1].get<int>(), t[2].get<int>()});
+  }
+  try {
+    return Shape::restored(*sh, mp, bounds, rc, std::move(poly), std::move(mesh));
+  } catch (const std::invalid_argument& e) {
+    sv.fail("volume", e.what());
+  }
+  return sh;
+}
+
 Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& run_info) {
   sim.sync_grains();
   const SimulationState st = sim.saved_state();
@@ -88,20 +137,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
     auto it = index.find(g.shape.get());
     if (it == index.end()) {
       it = index.emplace(g.shape.get(), shapes.size()).first;
-      Json sj = shape_to_json(*g.shape);
-      // What the factories would compute again from the (centred) source, as the run had
-      // it: rebuilding recomputes the mass properties from centred vertices and differs in
-      // the last bits, which a bit-identical resume cannot afford (Shape::restored).
-      const MassProperties& mp = g.shape->mass_properties();
-      Json I = Json::array();
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) I.push_back(mp.inertia(a, b));
-      const Aabb bb = g.shape->bounds();
-      sj["saved"] = {{"volume", mp.volume},
-                     {"inertia", I},
-                     {"bounds", {bb.lo.x, bb.lo.y, bb.lo.z, bb.hi.x, bb.hi.y, bb.hi.z}},
-                     {"recentring", vec(g.shape->recentring())}};
-      shapes.push_back(std::move(sj));
+      shapes.push_back(shape_saved_json(*g.shape));
     }
     grains.push_back({{"id", g.id},
                       {"parent", g.parent},
@@ -163,35 +199,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   std::vector<Shape::Ptr> shapes;
   for (auto& sc : c.children("shapes")) {
-    Shape::Ptr sh = shape_from_config(sc, dim);
-    if (sc.has("saved")) {
-      const Config sv = sc.child("saved");
-      MassProperties mp;
-      mp.volume = sv.positive("volume");
-      const auto I = sv.numbers("inertia");
-      if (I.size() != 9) sv.fail("inertia", "expected the 9 components of the inertia tensor, row by row");
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) mp.inertia(a, b) = I[3 * a + b];
-      const auto B = sv.numbers("bounds");
-      if (B.size() != 6) sv.fail("bounds", "expected [lo x, lo y, lo z, hi x, hi y, hi z]");
-      const Aabb bounds{{B[0], B[1], B[2]}, {B[3], B[4], B[5]}};
-      const Vec3 rc = sv.vec3("recentring", {});
-      // The saved source as written (already checked by shape_from_config).
-      std::vector<Vec3> poly;
-      TriMesh mesh;
-      const Json& d = sc.doc();
-      if (sh->kind() == ShapeKind::Polygon)
-        for (const auto& v : d.at("vertices")) poly.push_back({v[0].get<double>(), v[1].get<double>(), 0.0});
-      if (sh->kind() == ShapeKind::Polyhedron && d.contains("vertices") && d.contains("triangles")) {
-        for (const auto& v : d.at("vertices")) mesh.vertices.push_back({v[0].get<double>(), v[1].get<double>(), v[2].get<double>()});
-        for (const auto& t : d.at("triangles")) mesh.triangles.push_back({t[0].get<int>(), t[1].get<int>(), t[2].get<int>()});
-      }
-      try {
-        sh = Shape::restored(*sh, mp, bounds, rc, std::move(poly), std::move(mesh));
-      } catch (const std::invalid_argument& e) {
-        sv.fail("volume", e.what());
-      }
-    }
+    Shape::Ptr sh = shape_from_saved_config(sc, dim);
     shapes.push_back(std::move(sh));
   }
   for (auto& gc : c.children("grains")) {

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/Config.h"
 #include "core/Observer.h"
 #include "core/Simulation.h"
 
@@ -19,6 +20,12 @@ namespace crumble {
 // A shape as scenario JSON (analytic parameters, the closed mesh / polygon, or the
 // level-set grid with its surface nodes).
 nlohmann::json shape_to_json(const Shape& s);
+// shape_to_json plus the figures the run computed ("saved": mass properties, bounds,
+// recentring), so that shape_from_saved_config gives back a shape that computes with the
+// same numbers, bit for bit (checkpoints; shapes sent to other MPI ranks, parallel/).
+nlohmann::json shape_saved_json(const Shape& s);
+// Reads shape_saved_json's object (or a plain shape object); errors name the JSON path.
+Shape::Ptr shape_from_saved_config(const Config& sc, int dimension);
 
 // `run_info`: the run pipeline's own figures, stored as "run" (omitted when empty).
 nlohmann::json checkpoint_json(Simulation& sim, const std::string& scenario_name,

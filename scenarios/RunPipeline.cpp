@@ -299,6 +299,7 @@ RunResult execute(const RunRequest& req) {
   if (!req.resume) run_info = {{"packing_settle_steps", settle_steps}, {"packing_settled", packing_settled}};
   attach_standard_observers(sc, out, run_info);
   sim.set_stop_flag(&g_stop);
+  if (req.analysis_executor) sim.set_analysis_executor(req.analysis_executor(request_document(req), sc));
   const auto t_loading = std::chrono::steady_clock::now();
   // A progress line every few seconds on a terminal; in a log (stderr not a terminal: a
   // batch job, a test) one a minute, so long runs still show where they are without
@@ -327,6 +328,16 @@ RunResult execute(const RunRequest& req) {
   sum.wall_seconds = seconds_since(t0);
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
+  if (const AnalysisExecutor* ex = sim.analysis_executor()) {
+    j["analysis_ranks"] = ex->ranks();
+    Json n = Json::array(), t = Json::array();
+    for (const auto& r : ex->load()) {
+      n.push_back(r.analyses);
+      t.push_back(r.seconds);
+    }
+    j["analyses_per_rank"] = n;
+    j["analysis_seconds_per_rank"] = t;
+  }
   const RepresentationCounts built = representations_built() - built_before;
   j["representations_built"] = representations_json(built);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");

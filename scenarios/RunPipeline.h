@@ -4,6 +4,8 @@
 // SIGINT/SIGTERM. The command line only parses options into a RunRequest.
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -11,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/AnalysisExecutor.h"
 #include "scenarios/ScenarioFactory.h"
 
 namespace crumble {
@@ -44,6 +47,12 @@ struct RunRequest {
   // PNG figures at the end (when the scenario's output.plots is true): `crumble run` sets it;
   // the runs of `compare` and `sweep` leave it off, their folder gets the overlaid figures.
   bool plots = false;
+  // Where the breakage analyses run: given the scenario document the run builds (`sets`
+  // applied) and the scenario built from it, an executor (core/AnalysisExecutor.h; `crumble
+  // run` under mpirun: the MPI ranks, parallel/), or null for this process's threads.
+  // summary.json then says how many ranks ran analyses ("analysis_ranks").
+  std::function<std::shared_ptr<AnalysisExecutor>(const nlohmann::json& document, const Scenario& sc)>
+      analysis_executor;
 };
 
 struct RunResult {

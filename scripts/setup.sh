@@ -3,7 +3,11 @@
 # builds crumble in ./build (binary: build/crumble). Run as root on a fresh machine, or as a
 # user when the packages are already there.
 #
-#   bash scripts/setup.sh [--target NAME]... [cmake configure arguments]...
+#   bash scripts/setup.sh [--mpi] [--target NAME]... [cmake configure arguments]...
+#
+# --mpi: also install Open MPI (libopenmpi-dev, openmpi-bin) and build with -DCRUMBLE_MPI=ON in
+# ./build-mpi instead (binary build-mpi/crumble; `mpirun -np N build-mpi/crumble run ...` spreads
+# the breakage analyses over N ranks, docs/performance.md). The default build needs no MPI.
 #
 # Without --target everything is built (the crumble binary and every test program: what
 # `ctest` needs); `--target crumble` builds only the binary (the README's first command).
@@ -14,8 +18,10 @@ cd "$(dirname "$0")/.."
 
 targets=()
 configure=()
+mpi=0
 while [ $# -gt 0 ]; do
   case "$1" in
+    --mpi) mpi=1; shift ;;
     --target)
       [ $# -ge 2 ] || { echo "setup: --target needs a name (e.g. --target crumble)" >&2; exit 2; }
       targets+=(--target "$2"); shift 2 ;;
@@ -29,6 +35,12 @@ packages=(g++ cmake make pkg-config libbullet-dev libode-dev libeigen3-dev libcg
 # Only the test suite reads the ParaView files back (tests/integration/paraview); python3-vtk9
 # pulls in Qt, so a build of selected targets (the README's run command) goes without it.
 [ ${#targets[@]} -eq 0 ] && packages+=(python3-vtk9)
+builddir=build
+if [ "$mpi" -eq 1 ]; then
+  packages+=(libopenmpi-dev openmpi-bin)
+  builddir=build-mpi
+  configure+=(-DCRUMBLE_MPI=ON)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -45,5 +57,5 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release ${configure[@]+"${configure[@]}"} >/dev/null
-cmake --build build -j"$jobs" ${targets[@]+"${targets[@]}"}
+cmake -S . -B "$builddir" -DCMAKE_BUILD_TYPE=Release ${configure[@]+"${configure[@]}"} >/dev/null
+cmake --build "$builddir" -j"$jobs" ${targets[@]+"${targets[@]}"}
