@@ -90,14 +90,18 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   // Crushable (stress model, von Mises, weak grains, level-set fragments); first breakage
   // at step 2150 of 2802; checkpoints every 500 steps and no wall-time checkpoint, so the
   // resume point is known.
+  // The skip rule is on (Screening.h): each grain's memory of its last intact analysis is in
+  // the checkpoint, or the resumed run would analyse grains the whole run skipped.
   const std::string sets =
       " --quiet --threads 1 --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
-      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0";
+      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0"
+      " --set screening.skip_intact_tolerance=0.1";
   const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
   ASSERT_EQ(a.status, 0) << a.output;
   const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
   const long steps = sa["steps"].get<long>();
   ASSERT_GT(sa["breakage_events"].get<long>(), 0);
+  ASSERT_GT(sa["analyses_skipped"].get<long>(), 0);
   ASSERT_GT(steps, 1200);
   // Kill somewhere after the first checkpoint (step 500) and before the end.
   std::mt19937 rng(20261130);
@@ -135,7 +139,12 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   ASSERT_TRUE(cp.contains("engine_state"));
   EXPECT_EQ(cp["engine_state"]["engine"], "lsdem");
   EXPECT_FALSE(cp["engine_state"]["pairs"].empty());
-  for (const auto& g : cp["grains"]) EXPECT_FALSE(g["strength"].empty());
+  int remembered = 0;
+  for (const auto& g : cp["grains"]) {
+    EXPECT_FALSE(g["strength"].empty());
+    remembered += g.contains("intact_load");
+  }
+  EXPECT_GT(remembered, 0);
 }
 
 // Bullet keeps state a checkpoint does not hold (persistent manifolds, solver warm starts, the
