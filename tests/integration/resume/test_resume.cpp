@@ -212,6 +212,27 @@ TEST(Resume, MalformedEngineStateIsAConfigError) {
   EXPECT_NE(r.output.find("bodies"), std::string::npos) << r.output;
 }
 
+// A grain's skip-rule memory (intact_load) that is not [partner, fx, fy, fz] rows in
+// increasing partner order is refused with its JSON path.
+TEST(Resume, MalformedIntactLoadIsAConfigError) {
+  const fs::path out = fs::temp_directory_path() / "crumble_resume_test" / "bad_intact_load";
+  fs::remove_all(out);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const std::string sets = " --quiet --set simulation.max_steps=200 --set output.checkpoint_every=100";
+  ASSERT_EQ(run_cli("run " + scen + " --out " + out.string() + sets).status, 0);
+  const auto good = nlohmann::json::parse(slurp(out / "checkpoint.json"));
+  for (const auto& bad : {nlohmann::json::parse(R"([[3, 1.0, 2.0, 3.0], [2, 1.0, 2.0, 3.0]])"),
+                          nlohmann::json::parse(R"([[3, 1.0, "x", 3.0]])"), nlohmann::json::parse(R"([[3, 1.0]])"),
+                          nlohmann::json::parse(R"({"3": 1})")}) {
+    auto cp = good;
+    cp["grains"][0]["intact_load"] = bad;
+    std::ofstream(out / "checkpoint.json") << cp.dump();
+    const auto r = run_cli("run " + scen + " --out " + out.string() + sets + " --set simulation.max_steps=400 --resume");
+    EXPECT_EQ(r.status, 2) << bad.dump() << "\n" << r.output;
+    EXPECT_NE(r.output.find("/grains/0/intact_load"), std::string::npos) << r.output;
+  }
+}
+
 TEST(Resume, EventsRowsMatchAnalysesAcrossAnInterruption) {
   const fs::path out = fs::temp_directory_path() / "crumble_resume_test" / "events";
   fs::remove_all(out);
