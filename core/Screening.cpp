@@ -86,7 +86,7 @@ const OptionTable& screening_options() {
         "(per partner, body frame) changed by more than this fraction of that analysis's largest force; 0 = "
         "analyse at every check (not in Zhu & Zhao 2019: docs/performance.md, \"Fewer analyses\")");
     s.def = std::monostate{};
-    s.default_doc = "the breakage model's: 0.1 for peridynamics, 0 (off) for the others";
+    s.default_doc = "the breakage model's: 0 (off) for every built-in model";
     return OptionTable{s};
   }();
   return t;
