@@ -4,6 +4,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "geometry/Shape.h"
 
@@ -42,6 +43,14 @@ struct StrengthState {
   void set(const std::string& name, double v) { values[name] = v; }
 };
 
+// The force one contact partner exerts on a grain, summed over their contact points, in the
+// grain's body frame (N). `partner` is the other grain's id, or -1 - wall index for a wall
+// (partner_key in core/Screening.h).
+struct PartnerForce {
+  GrainId partner = 0;
+  Vec3 force;
+};
+
 struct Grain {
   GrainId id = -1;
   GrainId parent = -1;
@@ -62,6 +71,11 @@ struct Grain {
   // stays in place and counts one more. So crush_count >= generation, and the difference is
   // the number of unsplit verdicts along the lineage.
   int crush_count = 0;
+  // The load of this grain's last breakage analysis when that analysis left it whole, one
+  // entry per contact partner in increasing `partner` order; empty when the grain was never
+  // analysed or its last verdict was "broken". The skip rule (ScreeningSettings::
+  // skip_intact_tolerance) compares the load of a check with it. Children start empty.
+  std::vector<PartnerForce> intact_load;
 
   double mass(double density) const { return density * shape->volume(); }
   Vec3 to_world(const Vec3& local) const { return position + orientation.rotate(local); }

@@ -64,6 +64,7 @@ struct RunSummary {
   double wall_seconds = 0;
   std::size_t grains_initial = 0, grains_final = 0;
   long breakage_events = 0, analyses = 0, fragment_fallbacks = 0, dt_reductions = 0;
+  long analyses_skipped = 0;  // screened in, but the skip rule (Screening.h) spared the analysis
   double mass_initial = 0, mass_final = 0, mass_removed = 0;
   double void_ratio_initial = 0, void_ratio_final = 0;
   double max_platen_stress = 0;

@@ -1,6 +1,8 @@
 #include "core/Screening.h"
 
 #include <algorithm>
+#include <limits>
+#include <map>
 #include <unordered_map>
 #include <utility>
 
@@ -74,6 +76,57 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
   r.selected = true;
   r.reason = "selected";
   return r;
+}
+
+const OptionTable& screening_options() {
+  static const OptionTable t = [] {
+    OptionSpec s = opt::number(
+        "skip_intact_tolerance", 0, 0, 10, "",
+        "a grain whose last analysis left it whole is not analysed again while no contact partner's force on it "
+        "(per partner, body frame) changed by more than this fraction of that analysis's largest force; 0 = "
+        "analyse at every check (not in Zhu & Zhao 2019: docs/performance.md, \"Fewer analyses\")");
+    s.def = std::monostate{};
+    s.default_doc = "the breakage model's: 0 (off) for every built-in model";
+    return OptionTable{s};
+  }();
+  return t;
+}
+
+std::vector<PartnerForce> partner_forces(const Grain& g, std::span<const Contact> contacts) {
+  std::map<GrainId, Vec3> sum;
+  for (const auto& c : contacts) sum[partner_key(c)] += c.force;
+  const Quat to_body = g.orientation.normalized().conjugate();
+  std::vector<PartnerForce> r;
+  r.reserve(sum.size());
+  for (const auto& [k, f] : sum) r.push_back({k, to_body.rotate(f)});
+  return r;
+}
+
+double load_change(std::span<const PartnerForce> then, std::span<const PartnerForce> now) {
+  double fmax = 0;
+  for (const auto& p : then) fmax = std::max(fmax, norm(p.force));
+  if (!(fmax > 0)) return std::numeric_limits<double>::infinity();
+  // Both lists are sorted by partner: merge them.
+  double change = 0;
+  std::size_t i = 0, j = 0;
+  while (i < then.size() || j < now.size()) {
+    Vec3 d;
+    if (j == now.size() || (i < then.size() && then[i].partner < now[j].partner)) {
+      d = then[i++].force;  // a partner lost since
+    } else if (i == then.size() || now[j].partner < then[i].partner) {
+      d = now[j++].force;  // a new partner
+    } else {
+      d = now[j++].force - then[i++].force;
+    }
+    change = std::max(change, norm(d));
+  }
+  const double r = change / fmax;
+  return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+}
+
+bool skip_analysis(const Grain& g, std::span<const PartnerForce> now, const ScreeningSettings& s) {
+  if (!(s.skip_intact_tolerance > 0) || g.intact_load.empty()) return false;
+  return load_change(g.intact_load, now) <= s.skip_intact_tolerance;
 }
 
 std::vector<std::vector<Contact>> contacts_by_grain(std::span<const Grain> grains, std::span<const Contact> contacts) {

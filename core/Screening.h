@@ -8,6 +8,7 @@
 
 #include "core/Contact.h"
 #include "core/Grain.h"
+#include "core/Options.h"
 
 namespace crumble {
 
@@ -17,7 +18,19 @@ struct ScreeningSettings {
   double max_unbalanced_force_ratio = 0;   // <= 0 disables
   double max_unbalanced_moment_ratio = 0;  // <= 0 disables
   int min_contacts = 1;
+  // Skip rule (crumble's, not Zhu & Zhao's): a grain that passes the rules above but whose
+  // last analysis left it whole is not analysed again while the force of every contact
+  // partner on it (summed per partner, body frame) differs from that analysis's by at most
+  // this fraction of the analysis's largest partner force. A deterministic analysis of an
+  // unchanged load gives the same verdict; the tolerance bounds the change it may miss
+  // (the largest force may grow by this fraction; a new partner may bring up to it; a force
+  // of the largest magnitude may turn by about this many radians). <= 0: analyse at every check.
+  double skip_intact_tolerance = 0;
 };
+
+// The options of the "screening" object declared in a table (the rest is read by the
+// scenario factory): skip_intact_tolerance, whose default is the breakage model's.
+const OptionTable& screening_options();
 
 // Zhu & Zhao 2019, §5: crushing limit 0.3 mm, unbalanced-force ratio <= 0.02,
 // unbalanced-moment ratio <= 0.2, at least two contacts, force threshold on.
@@ -39,6 +52,21 @@ struct ScreeningResult {
 // is the model's screening force for g (BreakageModel::threshold_force).
 ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s,
                        double threshold_force = 0);
+
+// The key of a contact's partner in Grain::intact_load: the other grain's id, or -1 - wall.
+inline GrainId partner_key(const Contact& c) { return c.is_wall() ? -1 - static_cast<GrainId>(c.wall) : c.b; }
+
+// The load on `g` (contacts: forces on g, world frame) per partner, summed over each partner's
+// contact points and turned into g's body frame, in increasing partner order.
+std::vector<PartnerForce> partner_forces(const Grain& g, std::span<const Contact> contacts);
+
+// max over partners |F_now − F_then| / max over partners |F_then| (a partner missing on one
+// side counts with zero force); infinity when `then` is empty or carries no force.
+double load_change(std::span<const PartnerForce> then, std::span<const PartnerForce> now);
+
+// The skip rule: true when g's last analysis left it whole and its load `now` (partner_forces)
+// changed by at most s.skip_intact_tolerance since (load_change). False when the rule is off.
+bool skip_analysis(const Grain& g, std::span<const PartnerForce> now, const ScreeningSettings& s);
 
 // The contacts on each grain, in the order of `grains`: a grain–grain contact appears on
 // both grains, on b with a and b swapped and the normal and force reversed (the force on b).

@@ -92,6 +92,7 @@ SimulationState Simulation::saved_state() const {
   s.removed_mass = removed_mass_;
   s.events = events_;
   s.analyses = analyses_;
+  s.analyses_skipped = analyses_skipped_;
   s.fallbacks = fallbacks_;
   s.dt_reductions = dt_reductions_;
   s.next_id = next_id_;
@@ -127,6 +128,7 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   removed_mass_ = st.removed_mass;
   events_ = st.events;
   analyses_ = st.analyses;
+  analyses_skipped_ = st.analyses_skipped;
   fallbacks_ = st.fallbacks;
   dt_reductions_ = st.dt_reductions;
   next_id_ = st.next_id;
@@ -313,6 +315,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.void_ratio_final = st.void_ratio;
   sum.breakage_events = events_;
   sum.analyses = analyses_;
+  sum.analyses_skipped = analyses_skipped_;
   sum.fragment_fallbacks = fallbacks_;
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
@@ -336,8 +339,17 @@ void Simulation::check_breakage(const RunState& st) {
   t0 = Clock::now();
   const std::vector<std::vector<Contact>> on = contacts_by_grain(grains_, all);
   std::vector<std::size_t> candidates;
-  for (std::size_t i = 0; i < grains_.size(); ++i)
-    if (screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i])).selected) candidates.push_back(i);
+  std::vector<std::vector<PartnerForce>> loads;  // per candidate, what its analysis is given
+  for (std::size_t i = 0; i < grains_.size(); ++i) {
+    if (!screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i])).selected) continue;
+    std::vector<PartnerForce> now = partner_forces(grains_[i], on[i]);
+    if (skip_analysis(grains_[i], now, screening_)) {
+      ++analyses_skipped_;
+      continue;
+    }
+    candidates.push_back(i);
+    loads.push_back(std::move(now));
+  }
   timings_.screening += seconds_since(t0);
   if (candidates.empty()) return;
 
@@ -408,7 +420,13 @@ void Simulation::check_breakage(const RunState& st) {
     else if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
     else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken) continue;
+    if (!results[k].broken) {
+      // Remembered for the skip rule (Screening.h) only when the rule is on, so that runs
+      // without it write the checkpoints they always wrote.
+      if (screening_.skip_intact_tolerance > 0) grains_[candidates[k]].intact_load = std::move(loads[k]);
+      continue;
+    }
+    grains_[candidates[k]].intact_load.clear();
     if (pieces < 2 && !crushed) {
       // The model's verdict counts even when the builder could not split the grain (Grain.h).
       ++grains_[candidates[k]].crush_count;

@@ -117,6 +117,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"removed_mass", st.removed_mass},
                 {"events", st.events},
                 {"analyses", st.analyses},
+                {"analyses_skipped", st.analyses_skipped},
                 {"fallbacks", st.fallbacks},
                 {"dt_reductions", st.dt_reductions},
                 {"next_id", st.next_id},
@@ -139,7 +140,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
       it = index.emplace(g.shape.get(), shapes.size()).first;
       shapes.push_back(shape_saved_json(*g.shape));
     }
-    grains.push_back({{"id", g.id},
+    Json gj = {{"id", g.id},
                       {"parent", g.parent},
                       {"origin", g.origin},
                       {"generation", g.generation},
@@ -150,7 +151,14 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                       {"velocity", vec(g.velocity)},
                       {"angular_velocity", vec(g.angular_velocity)},
                       {"strength", Json(g.strength.values)},
-                      {"crush_count", g.crush_count}});
+                      {"crush_count", g.crush_count}};
+    // The skip rule's memory (Grain::intact_load): [partner, fx, fy, fz] per partner.
+    if (!g.intact_load.empty()) {
+      Json il = Json::array();
+      for (const auto& p : g.intact_load) il.push_back({p.partner, p.force.x, p.force.y, p.force.z});
+      gj["intact_load"] = std::move(il);
+    }
+    grains.push_back(std::move(gj));
   }
   j["shapes"] = shapes;
   j["grains"] = grains;
@@ -184,6 +192,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.removed_mass = s.number("removed_mass", 0, 0);
   st.events = s.integer("events", 0, 0);
   st.analyses = s.integer("analyses", 0, 0);
+  st.analyses_skipped = s.integer("analyses_skipped", 0, 0);
   st.fallbacks = s.integer("fallbacks", 0, 0);
   st.dt_reductions = s.integer("dt_reductions", 0, 0);
   st.next_id = s.integer("next_id", 0, 0);
@@ -227,6 +236,29 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
       g.strength.set("threshold_force_N", gc.number("threshold_force", 0));
     }
     g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
+    if (gc.has("intact_load")) {
+      const Json& il = gc.raw("intact_load");
+      auto bad = [&](const std::string& why) { gc.fail("intact_load", why); };
+      if (!il.is_array()) bad("expected an array of [partner, fx, fy, fz] (partner: grain id, or -1 - wall index)");
+      for (std::size_t k = 0; k < il.size(); ++k) {
+        const Json& e = il[k];
+        const std::string at = "entry " + std::to_string(k) + ": ";
+        if (!e.is_array() || e.size() != 4 || !e[0].is_number_integer())
+          bad(at + "expected [partner, fx, fy, fz] with an integer partner");
+        PartnerForce p;
+        p.partner = e[0].get<GrainId>();
+        double f[3];
+        for (int d = 0; d < 3; ++d) {
+          if (!e[d + 1].is_number()) bad(at + "force components must be numbers (N)");
+          f[d] = e[d + 1].get<double>();
+          if (!std::isfinite(f[d])) bad(at + "force components must be finite (N)");
+        }
+        p.force = {f[0], f[1], f[2]};
+        if (!g.intact_load.empty() && !(g.intact_load.back().partner < p.partner))
+          bad(at + "partners must be in increasing order, each once");
+        g.intact_load.push_back(p);
+      }
+    }
     cp.grains.push_back(std::move(g));
   }
   if (c.has("engine_state")) cp.engine_state = c.raw("engine_state");

@@ -118,6 +118,8 @@ std::vector<NamedOptions> registered_options() {
   collect("fragment builder", fragment_builders(), out);
   // Output options declared in a table (the rest of "output" is read by the scenario factory).
   out.push_back({"output", "output", "ParaView output of a run (docs/output.md)", &vtk_output_options()});
+  out.push_back({"screening", "screening", "which grains are analysed; the skip rule for grains analysed whole",
+                 &screening_options()});
   return out;
 }
 

@@ -426,6 +426,7 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   j["grains_final"] = s.grains_final;
   j["breakage_events"] = s.breakage_events;
   j["analyses"] = s.analyses;
+  j["analyses_skipped"] = s.analyses_skipped;
   j["fragment_fallbacks"] = s.fragment_fallbacks;
   j["dt_reductions"] = s.dt_reductions;
   j["mass_initial_kg"] = s.mass_initial;

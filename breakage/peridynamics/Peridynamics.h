@@ -142,6 +142,9 @@ class PeridynamicsModel final : public BreakageModel {
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   std::vector<std::string> figure_names() const override { return {"points", "bonds", "steps", "force_at_split_N"}; }
   // Zhu & Zhao 2019, §5: their screening, and a check every 0.08 MPa of platen stress.
+  // Zhu & Zhao 2019 §5. The skip rule for grains analysed whole (Screening.h) stays off: it
+  // delays splits, and one pair of runs cannot bound by how much (docs/performance.md,
+  // "Fewer analyses").
   ScreeningSettings default_screening() const override { return zhu_zhao_screening(); }
   ScheduleSettings default_schedule() const override { return {0.08e6, 0}; }
   double threshold_force(const Grain& g) const override { return g.strength.get_or(kThreshold, 0); }

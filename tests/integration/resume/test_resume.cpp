@@ -92,14 +92,18 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   // Crushable (stress model, von Mises, weak grains, level-set fragments); first breakage
   // at step 2150 of 2802; checkpoints every 500 steps and no wall-time checkpoint, so the
   // resume point is known.
+  // The skip rule is on (Screening.h): each grain's memory of its last intact analysis is in
+  // the checkpoint, or the resumed run would analyse grains the whole run skipped.
   const std::string sets =
       " --quiet --threads 1 --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
-      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0";
+      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0"
+      " --set screening.skip_intact_tolerance=0.1";
   const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
   ASSERT_EQ(a.status, 0) << a.output;
   const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
   const long steps = sa["steps"].get<long>();
   ASSERT_GT(sa["breakage_events"].get<long>(), 0);
+  ASSERT_GT(sa["analyses_skipped"].get<long>(), 0);
   ASSERT_GT(steps, 1200);
   // Kill somewhere after the first checkpoint (step 500) and before the end.
   std::mt19937 rng(20261130);
@@ -158,7 +162,12 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   ASSERT_TRUE(cp.contains("engine_state"));
   EXPECT_EQ(cp["engine_state"]["engine"], "lsdem");
   EXPECT_FALSE(cp["engine_state"]["pairs"].empty());
-  for (const auto& g : cp["grains"]) EXPECT_FALSE(g["strength"].empty());
+  int remembered = 0;
+  for (const auto& g : cp["grains"]) {
+    EXPECT_FALSE(g["strength"].empty());
+    remembered += g.contains("intact_load");
+  }
+  EXPECT_GT(remembered, 0);
 }
 
 // Bullet keeps state a checkpoint does not hold (persistent manifolds, solver warm starts, the
@@ -224,6 +233,27 @@ TEST(Resume, MalformedEngineStateIsAConfigError) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("/engine_state"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("bodies"), std::string::npos) << r.output;
+}
+
+// A grain's skip-rule memory (intact_load) that is not [partner, fx, fy, fz] rows in
+// increasing partner order is refused with its JSON path.
+TEST(Resume, MalformedIntactLoadIsAConfigError) {
+  const fs::path out = fs::temp_directory_path() / "crumble_resume_test" / "bad_intact_load";
+  fs::remove_all(out);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const std::string sets = " --quiet --set simulation.max_steps=200 --set output.checkpoint_every=100";
+  ASSERT_EQ(run_cli("run " + scen + " --out " + out.string() + sets).status, 0);
+  const auto good = nlohmann::json::parse(slurp(out / "checkpoint.json"));
+  for (const auto& bad : {nlohmann::json::parse(R"([[3, 1.0, 2.0, 3.0], [2, 1.0, 2.0, 3.0]])"),
+                          nlohmann::json::parse(R"([[3, 1.0, "x", 3.0]])"), nlohmann::json::parse(R"([[3, 1.0]])"),
+                          nlohmann::json::parse(R"({"3": 1})")}) {
+    auto cp = good;
+    cp["grains"][0]["intact_load"] = bad;
+    std::ofstream(out / "checkpoint.json") << cp.dump();
+    const auto r = run_cli("run " + scen + " --out " + out.string() + sets + " --set simulation.max_steps=400 --resume");
+    EXPECT_EQ(r.status, 2) << bad.dump() << "\n" << r.output;
+    EXPECT_NE(r.output.find("/grains/0/intact_load"), std::string::npos) << r.output;
+  }
 }
 
 TEST(Resume, EventsRowsMatchAnalysesAcrossAnInterruption) {

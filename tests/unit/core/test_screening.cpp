@@ -97,3 +97,116 @@ TEST(Screening, NearlyCollinearPairIsBalanced) {
   EXPECT_TRUE(r.selected) << r.reason << " " << r.unbalanced_moment_ratio;
   EXPECT_LT(r.unbalanced_moment_ratio, 1e-8);
 }
+
+// ---------------------------------------------------------------- skip rule
+
+namespace {
+// A grain turned 90° about z, squeezed between a partner grain above and the floor below,
+// with its memory of an intact analysis under `then`.
+Grain remembered(std::span<const Contact> then) {
+  Grain g;
+  g.id = 1;
+  g.shape = Shape::sphere(1e-3);
+  g.orientation = Quat::from_axis_angle({0, 0, 1}, kPi / 2);
+  g.intact_load = partner_forces(g, then);
+  return g;
+}
+Contact floor_contact(Vec3 f) {
+  Contact c = contact({0, 0, -1e-3}, f);
+  c.b = -1;
+  c.wall = kFloor;
+  return c;
+}
+ScreeningSettings skipping(double tol) {
+  ScreeningSettings s = kZhuZhao;
+  s.skip_intact_tolerance = tol;
+  return s;
+}
+}  // namespace
+
+// Per partner, summed over its contact points, in the body frame, walls keyed -1 - wall.
+TEST(SkipRule, PartnerForcesAreSummedPerPartnerInTheBodyFrame) {
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {10, 0, -100}), contact({1e-4, 0, 1e-3}, {0, 0, -20}),
+                          floor_contact({-10, 0, 120})};
+  Grain g;
+  g.shape = Shape::sphere(1e-3);
+  g.orientation = Quat::from_axis_angle({0, 0, 1}, kPi / 2);  // body x = world y
+  const auto p = partner_forces(g, cs);
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_EQ(p[0].partner, -1 - kFloor);
+  EXPECT_EQ(p[1].partner, 2);
+  // world (10, 0, -120) seen from a body turned +90° about z: (0, -10, -120)
+  EXPECT_NEAR(p[1].force.x, 0, 1e-12);
+  EXPECT_NEAR(p[1].force.y, -10, 1e-12);
+  EXPECT_NEAR(p[1].force.z, -120, 1e-12);
+}
+
+// Analysed intact, the same contacts at the next check: skipped. A grain never analysed,
+// or with the rule off, is analysed.
+TEST(SkipRule, SameLoadAfterAnIntactAnalysisIsSkipped) {
+  std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), floor_contact({0, 0, 100})};
+  const Grain g = remembered(cs);
+  const auto now = partner_forces(g, cs);
+  EXPECT_EQ(load_change(g.intact_load, now), 0.0);
+  EXPECT_TRUE(skip_analysis(g, now, skipping(0.1)));
+  EXPECT_FALSE(skip_analysis(g, now, skipping(0)));  // rule off
+  Grain fresh = g;
+  fresh.intact_load.clear();
+  EXPECT_FALSE(skip_analysis(fresh, now, skipping(0.1)));
+}
+
+// Both forces 30 % larger: a change of 0.3 of the remembered largest force, analysed again
+// at tolerance 0.1 (and 0.29), skipped at 0.31.
+TEST(SkipRule, ForceThirtyPercentLargerIsAnalysed) {
+  std::vector<Contact> then{contact({0, 0, 1e-3}, {0, 0, -100}), floor_contact({0, 0, 100})};
+  std::vector<Contact> now{contact({0, 0, 1e-3}, {0, 0, -130}), floor_contact({0, 0, 130})};
+  const Grain g = remembered(then);
+  const auto p = partner_forces(g, now);
+  EXPECT_NEAR(load_change(g.intact_load, p), 0.3, 1e-12);
+  EXPECT_FALSE(skip_analysis(g, p, skipping(0.1)));
+  EXPECT_FALSE(skip_analysis(g, p, skipping(0.29)));
+  EXPECT_TRUE(skip_analysis(g, p, skipping(0.31)));
+}
+
+// The set of contacts changes: a new partner carrying 20 % of the largest force, a partner
+// lost, or the largest force turned by 15° (|ΔF| = 2 sin(7.5°) F = 0.261 F) — each analysed
+// again at tolerance 0.1; a new partner carrying 5 % is not material and stays skipped.
+TEST(SkipRule, NewLostOrRotatedContactIsAnalysed) {
+  std::vector<Contact> then{contact({0, 0, 1e-3}, {0, 0, -100}), floor_contact({0, 0, 100})};
+  const Grain g = remembered(then);
+  const ScreeningSettings s = skipping(0.1);
+  auto with_new = [&](double f) {
+    std::vector<Contact> cs = then;
+    Contact c = contact({1e-3, 0, 0}, {-f, 0, 0});
+    c.b = 7;
+    cs.push_back(c);
+    return partner_forces(g, cs);
+  };
+  EXPECT_NEAR(load_change(g.intact_load, with_new(20)), 0.2, 1e-12);
+  EXPECT_FALSE(skip_analysis(g, with_new(20), s));
+  EXPECT_TRUE(skip_analysis(g, with_new(5), s));
+  const std::vector<Contact> lost{contact({0, 0, 1e-3}, {0, 0, -100})};
+  EXPECT_NEAR(load_change(g.intact_load, partner_forces(g, lost)), 1.0, 1e-12);
+  EXPECT_FALSE(skip_analysis(g, partner_forces(g, lost), s));
+  const double a = 15 * kPi / 180;
+  const std::vector<Contact> turned{contact({0, 0, 1e-3}, {100 * std::sin(a), 0, -100 * std::cos(a)}),
+                                    floor_contact({-100 * std::sin(a), 0, 100 * std::cos(a)})};
+  EXPECT_NEAR(load_change(g.intact_load, partner_forces(g, turned)), 2 * std::sin(a / 2), 1e-12);
+  EXPECT_FALSE(skip_analysis(g, partner_forces(g, turned), s));
+}
+
+// The memory is in the body frame: the grain and its load turned together (a rigid rotation
+// of the whole neighbourhood) is the same load.
+TEST(SkipRule, RigidRotationOfGrainAndLoadIsNoChange) {
+  std::vector<Contact> then{contact({0, 0, 1e-3}, {0, 0, -100}), floor_contact({0, 0, 100})};
+  const Grain g = remembered(then);
+  Grain turned = g;
+  const Quat q = Quat::from_axis_angle(normalized(Vec3{1, 1, 0}), 0.7);
+  turned.orientation = q * g.orientation;
+  std::vector<Contact> now = then;
+  for (auto& c : now) c.force = q.rotate(c.force);
+  EXPECT_NEAR(load_change(g.intact_load, partner_forces(turned, now)), 0.0, 1e-12);
+  EXPECT_TRUE(skip_analysis(g, partner_forces(turned, now), skipping(0.1)));
+  // ... but the load turned while the grain kept its orientation is a change.
+  EXPECT_FALSE(skip_analysis(g, partner_forces(g, now), skipping(0.1)));
+}

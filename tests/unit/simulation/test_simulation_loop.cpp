@@ -352,3 +352,60 @@ TEST(SimulationLoop, CrushCountCountsUnsplitVerdicts) {
   }
   EXPECT_GE(total, 4) << "every grain is loaded past its limit; each must have been judged broken";
 }
+
+namespace {
+// A grain that never breaks, squeezed by a force growing 10 N per step, checked every step.
+struct SkipRun {
+  RunSummary sum;
+  std::vector<double> loads;  // of grain 0's analyses
+};
+SkipRun run_skipping(double tolerance) {
+  class Unbreakable : public ThresholdModel {
+   public:
+    void assign_strength(Grain& g, const Material&, Rng&) const override { g.strength.set("limit_N", 1e9); }
+  };
+  EngineContext ctx;
+  SqueezeSetup u = squeeze_setup();
+  u.sch.every_steps = 1;
+  u.scr.skip_intact_tolerance = tolerance;
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<Unbreakable>(), std::make_unique<EighthBuilder>(),
+                 ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  sim.set_container({0.01, 0.01, 0.01, 0});
+  for (int i = 0; i < 3; ++i) {
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    g.position = {3e-3 * i, 0, 0};
+    sim.add_grain(g);
+  }
+  SkipRun r;
+  struct Rec : Observer {
+    std::vector<double>* loads;
+    void on_analysis(const Simulation&, const AnalysisRecord& a) override {
+      if (a.grain == 0) loads->push_back(a.analysis.load);
+    }
+  };
+  auto rec = std::make_shared<Rec>();
+  rec->loads = &r.loads;
+  sim.add_observer(rec);
+  r.sum = sim.run();
+  return r;
+}
+}  // namespace
+
+// The skip rule (Screening.h) in the loop: without it every check analyses every grain (a
+// check every 10 N up to 400 N); with tolerance 0.35 a grain analysed whole is analysed again
+// only at the first check whose force is more than 1.35 times that of its last analysis (no
+// product of the sequence lands within 0.5 N of a check's force).
+TEST(SimulationLoop, SkipRuleAnalysesAgainOnlyWhenTheLoadGrew) {
+  const SkipRun off = run_skipping(0), on = run_skipping(0.35);
+  // 40 or 41 checks: the platen force reaches 400 N at step 40 give or take round-off.
+  ASSERT_GE(off.loads.size(), 40u);
+  ASSERT_LE(off.loads.size(), 41u);
+  EXPECT_EQ(off.sum.analyses, 3 * static_cast<long>(off.loads.size()));
+  EXPECT_EQ(off.sum.analyses_skipped, 0);
+  const std::vector<double> expect{10, 20, 30, 50, 70, 100, 140, 190, 260, 360};
+  ASSERT_EQ(on.loads.size(), expect.size());
+  for (std::size_t k = 0; k < expect.size(); ++k) EXPECT_NEAR(on.loads[k], expect[k], 1e-6) << k;
+  EXPECT_EQ(on.sum.analyses, 3 * static_cast<long>(expect.size()));
+  EXPECT_EQ(on.sum.analyses + on.sum.analyses_skipped, off.sum.analyses);  // every screened-in check is one or the other
+}
