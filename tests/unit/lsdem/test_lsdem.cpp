@@ -57,7 +57,8 @@ Contact pressed_pair(const LsdemSettings& s, const Shape::Ptr& sh, double delta,
   e.add_grain(grain(0, sh, {0, 0, 0}, q));
   e.add_grain(grain(1, sh, normalized(axis) * (2.0 - delta), q.conjugate()));
   e.step(1e-9);
-  const Contact* c = find_pair(e.contacts());
+  const std::vector<Contact> all = e.contacts();  // find_pair points into it (AddressSanitizer)
+  const Contact* c = find_pair(all);
   if (!c) return {};
   Contact r = *c;
   if (r.a == 1) {  // report as seen by grain 0
