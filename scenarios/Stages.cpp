@@ -160,12 +160,14 @@ std::string fmt(double v, int prec = 3) {
 }  // namespace
 
 nlohmann::json stage_report(const std::string& dir, double target, std::string* markdown) {
-  const std::string path = dir + "/stages.csv";
+  std::string path = dir + "/stages.csv";
+  bool unfinished = false;
   if (!fs::exists(path)) {
-    if (fs::exists(path + ".part"))
-      throw InputError(path + " is not finished (a run is writing it, or was killed: its rows are in " + path +
-                       ".part; resume the run with --resume or read the .part file)");
-    throw InputError("cannot read " + path + ": no such file (a run of crumble writes it in its output folder)");
+    // A run still going (or killed) has its rows so far in stages.csv.part.
+    if (!fs::exists(path + ".part"))
+      throw InputError("cannot read " + path + ": no such file (a run of crumble writes it in its output folder)");
+    path += ".part";
+    unfinished = true;
   }
   const auto rows = read_csv(path);
   if (rows.empty()) throw InputError(path + ": empty file");
@@ -212,6 +214,7 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
                            {"breaking_analyses", s.breaking}});
   const double measured_to = st.back().to, measured_wall = st.back().wall_total;
   j["measured_to_MPa"] = measured_to;
+  j["unfinished"] = unfinished;
   j["measured_wall_s"] = measured_wall;
 
   // The fits use the stages from the first one with a breakage on (before it the
@@ -273,7 +276,8 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
          << " | " << s.grains << " | " << fmt(s.wall) << " | " << s.analyses << " | " << s.breaking << " | "
          << fmt(s.mean_ms) << " | " << (std::isfinite(s.share) ? fmt(100 * s.share, 2) + " %" : "—") << " | "
          << fmt(s.engine_ms) << " |\n";
-    md << "\nMeasured: " << fmt(measured_to) << " MPa in " << fmt(measured_wall, 4) << " s of wall.\n";
+    md << "\nMeasured: " << fmt(measured_to) << " MPa in " << fmt(measured_wall, 4) << " s of wall"
+       << (unfinished ? " (from stages.csv.part: the run is still going, or was killed)" : "") << ".\n";
     if (can) {
       md << "Cost per MPa = " << fmt(cf.coefficient) << " s · N^" << fmt(cf.exponent) << " (" << cf.points
          << " stages); grains N = " << fmt(gf.coefficient) << " · (σ/MPa)^" << fmt(gf.exponent) << " (" << gf.points

@@ -102,6 +102,12 @@ TEST(Stages, CliNamesAMissingOrBrokenFile) {
   r = run_cli("stages " + bad.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("line 6, column wall_s"), std::string::npos) << r.output;
+  // A run still going: its rows so far are in stages.csv.part, which is read and said so.
+  const fs::path going = write_table("crumble_stages_going", 12, false);
+  fs::rename(going / "stages.csv", going / "stages.csv.part");
+  r = run_cli("stages " + going.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("from stages.csv.part"), std::string::npos) << r.output;
   r = run_cli("stages " + write_table("crumble_stages_ok", 12, false).string() + " --to 20 --json");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("\"predicted_hours\""), std::string::npos) << r.output;
