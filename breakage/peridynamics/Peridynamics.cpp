@@ -38,6 +38,7 @@ struct RunResult {
   long steps = 0;
   long broken_bonds = 0;
   int static_iterations = 0;
+  double lambda_first = 0;  // load factor at which the static solution breaks its first bond (0: no preload)
   double dt = 0;
   std::string outcome;
   std::vector<double> alive_at_split;  // bond state when the split was first seen
@@ -84,7 +85,8 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
     int iterations = 0;
     const auto u1 = sys.static_unit_solution(o.preload_tolerance, 20000, &iterations, o.threads);
     r.static_iterations = iterations;
-    const double lambda0 = o.preload_fraction * sys.first_break_factor(u1);
+    r.lambda_first = sys.first_break_factor(u1);
+    const double lambda0 = o.preload_fraction * r.lambda_first;
     if (lambda0 >= lambda_max) {
       sys.set_state(u1, lambda_max, 0.0);
       r.lambda = lambda_max;
@@ -410,13 +412,14 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   const auto t0 = Clock::now();
   BreakageAnalysis a;
   long points = 0, bonds = 0, steps = 0;
-  double force_at_split = 0;
+  double force_at_split = 0, first_break_force = 0;
   auto finish = [&](const std::string& outcome) {
     a.outcome = outcome;
     a.figures = {{"points", static_cast<double>(points)},
                  {"bonds", static_cast<double>(bonds)},
                  {"steps", static_cast<double>(steps)},
-                 {"force_at_split_N", force_at_split}};
+                 {"force_at_split_N", force_at_split},
+                 {"first_break_force_N", first_break_force}};
     a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return a;
   };
@@ -483,6 +486,7 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   const double fmax = a.load;
   const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
   steps = r.steps;
+  if (std::isfinite(r.lambda_first)) first_break_force = r.lambda_first * fmax;
   if (r.split) {
     PointClusters pc = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
     // A piece above the child size at the split may crumble into fines (< 3 %) during the

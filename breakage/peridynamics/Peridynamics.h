@@ -140,7 +140,12 @@ class PeridynamicsModel final : public BreakageModel {
   // PointClusters in the body frame (reference positions). A split also sets `points`: the
   // lattice with damage (broken share of each point's bonds), piece and displacement_m.
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
-  std::vector<std::string> figure_names() const override { return {"points", "bonds", "steps", "force_at_split_N"}; }
+  // first_break_force_N: the largest contact force at which the static solution breaks its
+  // first bond (elastic_preload; 0 without it): force_at_split_N / first_break_force_N says how
+  // far past its first broken bond a grain split.
+  std::vector<std::string> figure_names() const override {
+    return {"points", "bonds", "steps", "force_at_split_N", "first_break_force_N"};
+  }
   // Zhu & Zhao 2019, §5: their screening, and a check every 0.08 MPa of platen stress.
   // Zhu & Zhao 2019 §5. The skip rule for grains analysed whole (Screening.h) stays off: it
   // delays splits, and one pair of runs cannot bound by how much (docs/performance.md,

@@ -515,6 +515,15 @@ TEST(PeridynamicsModel, AnalyseSplitsOrKeepsAGrain) {
   EXPECT_EQ(low.outcome, "intact");
   EXPECT_EQ(low.figure("force_at_split_N"), 0.0);
   EXPECT_FALSE(low.fracture.has_value());
+
+  // The static first-break force is a property of the grain and the load pattern, not of the
+  // final load (linear elasticity until the first bond breaks): the same at 60 N and 300 N up
+  // to the round-off of the conjugate-gradient solve, and well below the crushing force (the
+  // diametral grain splits at about 3.6 times it: 172.4 N against 48.0 N in single_grain_pd).
+  const double first = hit.figure("first_break_force_N");
+  EXPECT_NEAR(low.figure("first_break_force_N"), first, 1e-6 * first);
+  EXPECT_GT(first, 20.0);
+  EXPECT_LT(first, 0.5 * hit.figure("force_at_split_N"));
 }
 
 // A grain on two lower contacts pressed from above (three balanced contacts, rotated
