@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include <chrono>
+#include <cstdlib>
+#include <ctime>
 
 #include "crumble_config.h"
 
@@ -543,10 +545,85 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   return j;
 }
 
+// `crumble bench pd-analysis [--scenario F] [--steps R] [--threads N]`: the breakage analysis
+// that crushes a grain, alone. The scenario (default scenarios/single_grain_pd.json) gives the
+// peridynamic options, the material and the size (scene.diameter, else d0); the grain, of G_c
+// gc0 scaled by eq. 15 to that size, is pressed by two opposite contacts at 1.5 × the load of
+// the reference grain scaled as √G_c·d² (Zhu & Zhao 2019, eq. 14), so the analysis ramps the
+// load until the grain splits, as the analysis of a breakage check that crushes it does. R
+// repeats; wall and CPU time per analysis, with the crushing force and the steps. breakage.threads
+// is set from --threads.
+Json bench_pd_analysis(long repeats, int threads, const std::string& file_in) {
+  const std::string file = file_in.empty() ? "scenarios/single_grain_pd.json" : file_in;
+  Json doc = load_scenario_file(file);
+  if (!doc.contains("breakage") || !doc["breakage"].is_object() || doc["breakage"].value("type", "") != "peridynamics")
+    throw ConfigError(file + ": /breakage/type", "bench pd-analysis needs a peridynamics scenario");
+  doc["breakage"]["threads"] = threads;
+  BuildOptions opt;
+  opt.threads = 1;
+  opt.source_name = file;
+  Scenario sc = build_scenario(doc, opt);
+  const auto& model = sc.sim->model();
+  const Json& b = sc.effective["breakage"];
+  const double gc0 = b.value("gc0", 30.0), d0 = b.value("d0", 2e-3);
+  double d = d0;
+  if (doc.contains("scene") && doc["scene"].is_object() && doc["scene"].contains("diameter"))
+    d = doc["scene"]["diameter"].get<double>();
+  const Material& m = sc.sim->context().materials.front();
+  Json breakage_section = b;
+  const PdOptions o = pd_options_from_config(Config(breakage_section));
+  Grain g;
+  g.id = 1;
+  g.shape = Shape::sphere(d / 2);
+  g.strength.set(PeridynamicsModel::kGc, pd_child_gc(o, gc0, d, d0));
+  const double load = 1.5 * 180.0 * std::sqrt(g.strength.get_or(PeridynamicsModel::kGc, gc0) / gc0) * (d / d0) * (d / d0);
+  std::vector<Contact> c(2);
+  c[0].a = c[1].a = g.id;
+  c[0].wall = kPlaten, c[0].point = {0, 0, d / 2}, c[0].force = {0, 0, -load};
+  c[1].wall = kFloor, c[1].point = {0, 0, -d / 2}, c[1].force = {0, 0, load};
+  auto cpu_now = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+  };
+  double wall = 0, wall_min = 1e300, cpu = 0;
+  BreakageAnalysis a;
+  for (long k = 0; k < repeats; ++k) {
+    const double c0 = cpu_now();
+    const auto t0 = std::chrono::steady_clock::now();
+    a = model.analyse(g, m, c);
+    const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    cpu += cpu_now() - c0;
+    wall += w;
+    wall_min = std::min(wall_min, w);
+  }
+  Json j;
+  j["benchmark"] = "pd-analysis";
+  j["scenario"] = file;
+  j["diameter_m"] = d;
+  j["gc_J_m2"] = g.strength.get_or(PeridynamicsModel::kGc, gc0);
+  j["density_scale"] = o.density_scale;
+  j["threads"] = threads;
+  j["load_N"] = load;
+  j["outcome"] = a.outcome;
+  j["force_at_split_N"] = a.figure("force_at_split_N");
+  j["points"] = a.figure("points");
+  j["bonds"] = a.figure("bonds");
+  j["steps"] = a.figure("steps");
+  j["repeats"] = repeats;
+  j["wall_s_per_analysis"] = wall / repeats;
+  j["wall_s_min"] = wall_min;
+  j["cpu_s_per_analysis"] = cpu / repeats;
+  double la[3] = {0, 0, 0};
+  if (getloadavg(la, 3) == 3) j["load_average"] = {la[0], la[1], la[2]};
+  return j;
+}
+
 }  // namespace
 
 Json run_benchmark(const std::string& what, long steps, int threads, const std::string& scenario,
                    const std::string& engine, long settle_steps) {
+  if (steps <= 0) steps = what == "pd-analysis" ? 3 : 1000;
   if (what == "engine") {
     if (engine.empty()) throw ConfigError("--engine", "bench engine needs --engine (known: " + engines().names() + ")");
     engines().find(engine, "--engine");
@@ -562,7 +639,8 @@ Json run_benchmark(const std::string& what, long steps, int threads, const std::
     j["benchmark"] = "pd-kernel";
     return j;
   }
-  throw ConfigError("bench " + what, "unknown benchmark; known: engine, lsdem, pd-kernel");
+  if (what == "pd-analysis") return bench_pd_analysis(steps, threads, scenario);
+  throw ConfigError("bench " + what, "unknown benchmark; known: engine, lsdem, pd-kernel, pd-analysis");
 }
 
 }  // namespace crumble

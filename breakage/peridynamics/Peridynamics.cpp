@@ -39,6 +39,8 @@ struct RunResult {
   long broken_bonds = 0;
   int static_iterations = 0;
   double lambda_first = 0;  // load factor at which the static solution breaks its first bond (0: no preload)
+  long hold_steps = 0;           // steps at full load (to the split or the end)
+  double quiet_transits_max = 0;  // longest stretch at full load without a newly broken bond, in wave transits
   double dt = 0;
   std::string outcome;
   std::vector<double> alive_at_split;  // bond state when the split was first seen
@@ -106,6 +108,8 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
   long broken_seen = 0;
   double t_full = -1;   // time the full load was reached
   double t_split = -1;  // time the first split was seen; the load then stays at its value
+  long bonds_seen = -1;  // quiet_transits: broken bonds at the last change, and its time
+  double t_change = -1;
   const pd::Lattice& L = sys.lattice();
   for (long n = 0;; ++n) {
     const double t = t0 + n * dt;
@@ -113,6 +117,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
     if (lambda >= lambda_max && t_full < 0) t_full = t;
     sys.step(dt, lambda, damping, o.threads);
     r.steps = n + 1;
+    if (t_full >= 0 && t_split < 0) ++r.hold_steps;
     r.lambda = lambda;
     if (t_split >= 0) {
       if (t - t_split >= o.post_split_transits * transit || r.steps >= o.max_steps) break;
@@ -132,10 +137,17 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
           continue;
         }
       }
+      if (t_full >= 0) {  // at full load: how long since a bond last broke (quiet_transits, figures)
+        const long b = sys.broken_bonds();
+        if (b != bonds_seen) bonds_seen = b, t_change = t;
+        r.quiet_transits_max = std::max(r.quiet_transits_max, (t - t_change) / transit);
+      }
       if (t_full >= 0 && t - t_full >= o.hold_transits * transit) {
         const double ke = sys.kinetic_energy();
         const double w = std::abs(sys.external_work_at_rest());
-        if (ke <= o.ke_tolerance * w || t - t_full >= o.max_hold_transits * transit) {
+        // quiet_transits: the full load held and no bond broken for that many wave transits.
+        const bool quiet = o.quiet_transits > 0 && t - t_change >= o.quiet_transits * transit;
+        if (ke <= o.ke_tolerance * w || quiet || t - t_full >= o.max_hold_transits * transit) {
           r.outcome = "intact";
           break;
         }
@@ -236,6 +248,9 @@ const OptionTable& peridynamics_options() {
                     "least hold at full load, in P-wave transits of d_e, until the kinetic energy decays"),
         opt::number("max_hold_transits", d.max_hold_transits, 0, 1e7, "", "give up waiting for rest after this"),
         opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "", "at rest when the kinetic energy ≤ this × the elastic work"),
+        opt::number("quiet_transits", d.quiet_transits, 0, 1e6, "",
+                    "at full load, end intact once no bond has broken for this many P-wave transits of d_e "
+                    "(0 = off: wait for the kinetic energy; not in Zhu & Zhao 2019)"),
         opt::number("post_split_transits", d.post_split_transits, 0, 1e6, "", "wave transits integrated after the first split"),
         opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
         opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
@@ -271,6 +286,7 @@ PdOptions pd_options_from_config(const Config& cfg) {
   o.damping_ratio = r.number("damping_ratio");
   o.density_scale = r.number("density_scale");
   o.hold_transits = r.number("hold_transits");
+  o.quiet_transits = r.number("quiet_transits");
   o.max_hold_transits = r.number("max_hold_transits");
   o.ke_tolerance = r.number("ke_tolerance");
   o.post_split_transits = r.number("post_split_transits");
@@ -316,6 +332,7 @@ void validate(const PdOptions& o) {
   // eq. 12 with U in [0, 1) must give a positive strength: (U − b)/a > 0 for a < 0 < 1 <= b.
   require(o.weibull_a < 0 && o.weibull_b >= 1, "weibull_a must be < 0 and weibull_b >= 1 (eq. 12 positive)");
   require(o.threshold_force_ref >= 0, "threshold_force_ref must be >= 0");
+  require(o.quiet_transits >= 0 && std::isfinite(o.quiet_transits), "quiet_transits must be >= 0");
   require(o.intact_below_first_break >= 0 && std::isfinite(o.intact_below_first_break),
           "intact_below_first_break must be >= 0");
 }
@@ -420,14 +437,16 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   const auto t0 = Clock::now();
   BreakageAnalysis a;
   long points = 0, bonds = 0, steps = 0;
-  double force_at_split = 0, first_break_force = 0;
+  double force_at_split = 0, first_break_force = 0, hold_steps = 0, quiet_max = 0;
   auto finish = [&](const std::string& outcome) {
     a.outcome = outcome;
     a.figures = {{"points", static_cast<double>(points)},
                  {"bonds", static_cast<double>(bonds)},
                  {"steps", static_cast<double>(steps)},
                  {"force_at_split_N", force_at_split},
-                 {"first_break_force_N", first_break_force}};
+                 {"first_break_force_N", first_break_force},
+                 {"hold_steps", hold_steps},
+                 {"quiet_transits_max", quiet_max}};
     a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return a;
   };
@@ -495,6 +514,8 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
   steps = r.steps;
   if (std::isfinite(r.lambda_first)) first_break_force = r.lambda_first * fmax;
+  hold_steps = static_cast<double>(r.hold_steps);
+  quiet_max = r.quiet_transits_max;
   if (r.split) {
     PointClusters pc = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
     // A piece above the child size at the split may crumble into fines (< 3 %) during the

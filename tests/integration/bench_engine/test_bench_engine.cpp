@@ -73,3 +73,31 @@ TEST(BenchEngine, BadInputIsExit2) {
   r = run_cli("bench lsdem --engine bullet --steps 1");
   EXPECT_EQ(r.status, 2) << r.output;
 }
+
+// `crumble bench pd-analysis`: the analysis that crushes the reference grain, alone. At lattice
+// 0.1 the 2 mm grain of G_c0 splits near Zhu & Zhao 2019's 180 N (the unit tests bound the
+// lattice's error); a stress-model scenario is refused. (single_grain_pd runs on Bullet.)
+#if CRUMBLE_WITH_BULLET
+TEST(BenchPdAnalysis, CrushesTheReferenceGrainAndRefusesOtherModels) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_bench_pd_analysis";
+  fs::create_directories(dir);
+  std::ifstream in(std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/single_grain_pd.json");
+  Json doc = Json::parse(in);
+  doc["breakage"]["spacing_fraction"] = 0.1;
+  std::ofstream(dir / "coarse.json") << doc.dump(1);
+  auto r = run_cli("bench pd-analysis --steps 1 --scenario " + (dir / "coarse.json").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Json j = Json::parse(r.output);
+  EXPECT_EQ(j.at("outcome"), "split");
+  EXPECT_NEAR(j.at("force_at_split_N").get<double>(), 180.0, 36.0);
+  EXPECT_LT(j.at("force_at_split_N").get<double>(), j.at("load_N").get<double>());
+  EXPECT_GT(j.at("steps").get<double>(), 0);
+  EXPECT_GT(j.at("cpu_s_per_analysis").get<double>(), 0);
+  EXPECT_GT(j.at("wall_s_per_analysis").get<double>(), 0);
+  EXPECT_EQ(j.at("repeats"), 1);
+  r = run_cli("bench pd-analysis --steps 1 --scenario " + std::string(CRUMBLE_SOURCE_DIR) +
+              "/scenarios/oedometer_harmon_2d_quick.json");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("/breakage/type"), std::string::npos) << r.output;
+}
+#endif
