@@ -79,8 +79,7 @@ std::int32_t nearest_point(const Lattice& L, const Vec3& p, double* dist) {
 // static solution u1 for unit load is computed once (conjugate gradients), the factor
 // λ_first at which its most stretched bond would break is found, and the dynamics start
 // at t0 = preload_fraction·λ_first / ramp from that quasi-static state. A grain whose
-// static stretches stay below preload_fraction·s_c at the full load ends there (intact), and
-// so does one whose full load is below intact_below_first_break·λ_first (option, off by default).
+// static stretches stay below preload_fraction·s_c at the full load ends there (intact).
 RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double c_p, const PdOptions& o) {
   RunResult r;
   double t0 = 0;
@@ -90,7 +89,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
     r.static_iterations = iterations;
     r.lambda_first = sys.first_break_factor(u1);
     const double lambda0 = o.preload_fraction * r.lambda_first;
-    if (lambda0 >= lambda_max || o.intact_below_first_break * r.lambda_first > lambda_max) {
+    if (lambda0 >= lambda_max) {
       sys.set_state(u1, lambda_max, 0.0);
       r.lambda = lambda_max;
       r.outcome = "intact";
@@ -239,10 +238,6 @@ const OptionTable& peridynamics_options() {
                      "start from the static solution just below the first bond failure"),
         opt::number("preload_fraction", d.preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
         opt::number("preload_tolerance", d.preload_tolerance, 1e-14, 1e-2, "", "relative residual of the static solve"),
-        opt::number("intact_below_first_break", d.intact_below_first_break, 0, 1e3, "",
-                    "with elastic_preload: a largest contact force below this × the force that statically breaks "
-                    "the first bond ends the analysis intact without dynamics (0 = off; not in Zhu & Zhao 2019: "
-                    "docs/performance.md, \"Fewer analyses\")"),
         opt::number("damping_ratio", d.damping_ratio, 0, 10, "", "mass-proportional damping ratio of the analysis"),
         opt::number("hold_transits", d.hold_transits, 0, 1e6, "",
                     "least hold at full load, in P-wave transits of d_e, until the kinetic energy decays"),
@@ -293,7 +288,6 @@ PdOptions pd_options_from_config(const Config& cfg) {
   o.elastic_preload = r.boolean("elastic_preload");
   o.preload_fraction = r.number("preload_fraction");
   o.preload_tolerance = r.number("preload_tolerance");
-  o.intact_below_first_break = r.number("intact_below_first_break");
   o.max_steps = r.integer("max_steps");
   o.check_interval = r.integer("check_interval");
   o.threads = static_cast<int>(r.integer("threads"));
@@ -333,8 +327,6 @@ void validate(const PdOptions& o) {
   require(o.weibull_a < 0 && o.weibull_b >= 1, "weibull_a must be < 0 and weibull_b >= 1 (eq. 12 positive)");
   require(o.threshold_force_ref >= 0, "threshold_force_ref must be >= 0");
   require(o.quiet_transits >= 0 && std::isfinite(o.quiet_transits), "quiet_transits must be >= 0");
-  require(o.intact_below_first_break >= 0 && std::isfinite(o.intact_below_first_break),
-          "intact_below_first_break must be >= 0");
 }
 
 // ---------------------------------------------------------------- strength

@@ -91,11 +91,6 @@ struct PdOptions {
   bool elastic_preload = true;     // "elastic_preload": start from the static state just before the first break
   double preload_fraction = 0.9;   // "preload_fraction": of the load factor that breaks the first bond
   double preload_tolerance = 1e-6; // "preload_tolerance": relative residual of the static solve
-  // "intact_below_first_break": with elastic_preload, an analysis whose full load stays below
-  // this × the load that statically breaks the grain's first bond ends intact after the static
-  // solve, without dynamics (crumble's, not Zhu & Zhao 2019's; 0 = off: only below
-  // preload_fraction × it). A diametral 2 mm grain splits at 3.6× its first-break load.
-  double intact_below_first_break = 0;
   long max_steps = 2'000'000;    // "max_steps": hard cap per analysis (outcome step_limit)
   long check_interval = 5;       // "check_interval": steps between connectivity/rest checks
   int threads = 1;               // "threads": OpenMP threads inside one analysis (bitwise independent)

@@ -526,36 +526,6 @@ TEST(PeridynamicsModel, AnalyseSplitsOrKeepsAGrain) {
   EXPECT_LT(first, 0.5 * hit.figure("force_at_split_N"));
 }
 
-// intact_below_first_break: a load below k × the static first-break force ends the analysis
-// after the static solve (no steps); above it the dynamics run as before. 200 N splits the
-// reference grain (crushing force ≈ 180 N, first break ≈ 48 N): k = 5 (240 N) keeps it whole
-// without a step, k = 3 (144 N) lets it split exactly as with the option off.
-TEST(PeridynamicsModel, IntactBelowFirstBreakSkipsTheDynamics) {
-  Grain g = sphere_grain(1e-3, 30.0);
-  std::vector<Contact> c(2);
-  c[0].a = g.id, c[0].wall = kPlaten, c[0].point = g.position + Vec3{0, 0, 1e-3}, c[0].force = {0, 0, -200.0};
-  c[1].a = g.id, c[1].wall = kFloor, c[1].point = g.position - Vec3{0, 0, 1e-3}, c[1].force = {0, 0, 200.0};
-  auto with = [&](double k) {
-    PdOptions o;
-    o.intact_below_first_break = k;
-    return PeridynamicsModel{o}.analyse(g, table1(), c);
-  };
-  const BreakageAnalysis off = with(0), skip = with(5), run = with(3);
-  ASSERT_TRUE(off.broken);
-  EXPECT_FALSE(skip.broken);
-  EXPECT_EQ(skip.outcome, "intact");
-  EXPECT_EQ(skip.figure("steps"), 0.0);
-  EXPECT_NEAR(skip.figure("first_break_force_N"), off.figure("first_break_force_N"), 1e-9 * off.load);
-  EXPECT_LT(5 * skip.figure("first_break_force_N"), 260.0);  // the premise: 5 × first break > 200 N
-  EXPECT_GT(5 * skip.figure("first_break_force_N"), 200.0);
-  ASSERT_TRUE(run.broken);
-  EXPECT_EQ(run.figure("steps"), off.figure("steps"));
-  EXPECT_EQ(run.figure("force_at_split_N"), off.figure("force_at_split_N"));
-  PdOptions bad;
-  bad.intact_below_first_break = -1;
-  EXPECT_THROW(validate(bad), std::invalid_argument);
-}
-
 // quiet_transits: at full load, an analysis in which no bond has broken for that many wave
 // transits ends intact; a split is unchanged (the bonds keep breaking until it). The figures
 // say how long the load was held and the longest quiet stretch at full load.
