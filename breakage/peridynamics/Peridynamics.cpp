@@ -107,7 +107,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
   long broken_seen = 0;
   double t_full = -1;   // time the full load was reached
   double t_split = -1;  // time the first split was seen; the load then stays at its value
-  long bonds_seen = -1;  // quiet_transits: broken bonds at the last change, and its time
+  long bonds_seen = -1;  // at full load: broken bonds at the last change, and its time
   double t_change = -1;
   const pd::Lattice& L = sys.lattice();
   for (long n = 0;; ++n) {
@@ -136,7 +136,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
           continue;
         }
       }
-      if (t_full >= 0) {  // at full load: how long since a bond last broke (quiet_transits, figures)
+      if (t_full >= 0) {  // at full load: how long since a bond last broke (figure quiet_transits_max)
         const long b = sys.broken_bonds();
         if (b != bonds_seen) bonds_seen = b, t_change = t;
         r.quiet_transits_max = std::max(r.quiet_transits_max, (t - t_change) / transit);
@@ -144,9 +144,7 @@ RunResult run(PdSystem& sys, double ramp, double lambda_max, double d_e, double 
       if (t_full >= 0 && t - t_full >= o.hold_transits * transit) {
         const double ke = sys.kinetic_energy();
         const double w = std::abs(sys.external_work_at_rest());
-        // quiet_transits: the full load held and no bond broken for that many wave transits.
-        const bool quiet = o.quiet_transits > 0 && t - t_change >= o.quiet_transits * transit;
-        if (ke <= o.ke_tolerance * w || quiet || t - t_full >= o.max_hold_transits * transit) {
+        if (ke <= o.ke_tolerance * w || t - t_full >= o.max_hold_transits * transit) {
           r.outcome = "intact";
           break;
         }
@@ -243,9 +241,6 @@ const OptionTable& peridynamics_options() {
                     "least hold at full load, in P-wave transits of d_e, until the kinetic energy decays"),
         opt::number("max_hold_transits", d.max_hold_transits, 0, 1e7, "", "give up waiting for rest after this"),
         opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "", "at rest when the kinetic energy ≤ this × the elastic work"),
-        opt::number("quiet_transits", d.quiet_transits, 0, 1e6, "",
-                    "at full load, end intact once no bond has broken for this many P-wave transits of d_e "
-                    "(0 = off: wait for the kinetic energy; not in Zhu & Zhao 2019)"),
         opt::number("post_split_transits", d.post_split_transits, 0, 1e6, "", "wave transits integrated after the first split"),
         opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
         opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
@@ -281,7 +276,6 @@ PdOptions pd_options_from_config(const Config& cfg) {
   o.damping_ratio = r.number("damping_ratio");
   o.density_scale = r.number("density_scale");
   o.hold_transits = r.number("hold_transits");
-  o.quiet_transits = r.number("quiet_transits");
   o.max_hold_transits = r.number("max_hold_transits");
   o.ke_tolerance = r.number("ke_tolerance");
   o.post_split_transits = r.number("post_split_transits");
@@ -326,7 +320,6 @@ void validate(const PdOptions& o) {
   // eq. 12 with U in [0, 1) must give a positive strength: (U − b)/a > 0 for a < 0 < 1 <= b.
   require(o.weibull_a < 0 && o.weibull_b >= 1, "weibull_a must be < 0 and weibull_b >= 1 (eq. 12 positive)");
   require(o.threshold_force_ref >= 0, "threshold_force_ref must be >= 0");
-  require(o.quiet_transits >= 0 && std::isfinite(o.quiet_transits), "quiet_transits must be >= 0");
 }
 
 // ---------------------------------------------------------------- strength

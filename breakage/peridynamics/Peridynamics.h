@@ -82,11 +82,6 @@ struct PdOptions {
   double hold_transits = 4.0;    // "hold_transits": min hold at full load, in P-wave transits of d_e
   double max_hold_transits = 20; // "max_hold_transits": give up waiting for rest after this
   double ke_tolerance = 1e-3;    // "ke_tolerance": at rest when kinetic energy <= this × elastic work
-  // "quiet_transits": at full load (after hold_transits), end intact once no bond has broken for
-  // this many P-wave transits (crumble's, not Zhu & Zhao 2019's; 0 = off). Without damping the
-  // kinetic energy of the ramp's end never decays, so otherwise every intact analysis holds the
-  // load for max_hold_transits.
-  double quiet_transits = 0;
   double post_split_transits = 2; // "post_split_transits": keep integrating (load held) after the split
   bool elastic_preload = true;     // "elastic_preload": start from the static state just before the first break
   double preload_fraction = 0.9;   // "preload_fraction": of the load factor that breaks the first bond
@@ -149,7 +144,7 @@ class PeridynamicsModel final : public BreakageModel {
   // first bond (elastic_preload; 0 without it): force_at_split_N / first_break_force_N says how
   // far past its first broken bond a grain split. hold_steps: steps at full load (to the split or
   // the end); quiet_transits_max: the longest stretch at full load without a newly broken bond,
-  // in P-wave transits (what option quiet_transits would have cut).
+  // in P-wave transits (docs/performance.md, "Fewer analyses": why no rule cuts the hold).
   std::vector<std::string> figure_names() const override {
     return {"points", "bonds", "steps", "force_at_split_N", "first_break_force_N", "hold_steps", "quiet_transits_max"};
   }
