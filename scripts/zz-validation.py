@@ -143,7 +143,7 @@ def main():
                 continue
             g = snapshot(f)
             step = int(re.search(r"(\d+)\.vtp$", f).group(1))
-            mpa = steps.get(step, (float("nan"),))[0] / 1e6
+            mpa = 0.0 if step == 0 else steps.get(step, (float("nan"),))[0] / 1e6
             vals = list(g.values())
             inside = lambda v: 0.5 <= v[1] <= 1 and 0.5 <= v[2] <= 1
             crushed = [v for v in vals if v[3] > 0]
