@@ -28,12 +28,32 @@ struct RunResult {
 
 // Load factor λ(n) = min(λ_max, rate·n); explicit steps until two major pieces (then
 // post_split_steps more at the load of the split), or the full load held at rest, or the cap.
+//
+// Elastic preload (option elastic_preload): until the first bond breaks the array is linear,
+// and the damped ramp follows the static solution. So the static state for λ = 1 is solved
+// once, the factor λ_first at which its most loaded bond breaks is found, and the dynamics
+// start from preload_fraction·λ_first at rest; a grain that stays below that at the full load
+// is intact without dynamics (steps 0).
 RunResult run(bpm::System& sys, const bpm::Array& a, double rate, double lambda_max, const BpmOptions& o) {
   RunResult r;
+  double lambda0 = 0;
+  if (o.elastic_preload) {
+    const int it = sys.static_unit_solution(1e-8, 20 * static_cast<int>(a.size()) + 200);
+    const double ratio = sys.unit_stress_ratio();
+    if (it >= 0 && ratio > 0 && std::isfinite(ratio)) {
+      lambda0 = o.preload_fraction / ratio;
+      if (lambda0 >= lambda_max) {
+        r.lambda = lambda_max;
+        r.outcome = "intact";
+        return r;
+      }
+      sys.start_from_static(lambda0);
+    }
+  }
   const double dt = sys.stable_dt();
   long full_at = -1, split_at = -1, broken_seen = 0;
   for (long n = 1;; ++n) {
-    const double lambda = split_at >= 0 ? r.lambda : std::min(lambda_max, rate * static_cast<double>(n));
+    const double lambda = split_at >= 0 ? r.lambda : std::min(lambda_max, lambda0 + rate * static_cast<double>(n));
     if (lambda >= lambda_max && full_at < 0) full_at = n;
     sys.step(dt, lambda, o.damping);
     r.steps = n;
@@ -45,7 +65,7 @@ RunResult run(bpm::System& sys, const bpm::Array& a, double rate, double lambda_
     if (n % o.check_interval == 0 || n >= o.max_steps) {
       if (sys.broken() != broken_seen) {
         broken_seen = sys.broken();
-        if (bpm::major_count(bpm::components(a, sys.intact()), o.min_child_fraction) >= 2) {
+        if (bpm::major_count(bpm::components(a, sys.intact()), o.min_child_fraction, o.min_piece_elements) >= 2) {
           r.split = true;
           r.outcome = "split";
           r.intact_at_split = sys.intact();
@@ -123,7 +143,8 @@ Quat axis_onto(int dim, const Vec3& a) {
 
 // The pieces for the fragment builders: major components become clusters 0..k−1 (largest
 // first); each minor one joins the cluster of the element nearest to any of its elements.
-PointClusters clusters_of(const bpm::Array& a, const std::vector<char>& intact, double min_fraction) {
+PointClusters clusters_of(const bpm::Array& a, const std::vector<char>& intact, double min_fraction,
+                          long min_elements) {
   const auto c = bpm::components(a, intact);
   std::vector<int> order(c.count);
   for (int k = 0; k < c.count; ++k) order[k] = k;
@@ -132,7 +153,9 @@ PointClusters clusters_of(const bpm::Array& a, const std::vector<char>& intact, 
   std::vector<int> id(c.count, -1);
   int majors = 0;
   for (int k : order)
-    if (static_cast<double>(c.size[k]) >= min_fraction * static_cast<double>(total) || majors == 0) id[k] = majors++;
+    if ((static_cast<double>(c.size[k]) >= min_fraction * static_cast<double>(total) && c.size[k] >= min_elements) ||
+        majors == 0)
+      id[k] = majors++;
   PointClusters pc;
   pc.spacing = a.d;
   pc.points = a.points;
@@ -207,6 +230,9 @@ const OptionTable& bonded_particles_options() {
                     "a contact farther than this × element diameter from every element: outcome contact_off_grain"),
         opt::number("damping", d.damping, 0, 0.99, "", "local non-viscous damping coefficient α (Cundall)"),
         opt::integer("ramp_steps", d.ramp_steps, 1, 1'000'000'000, "steps over which the contact forces grow to full"),
+        opt::boolean("elastic_preload", d.elastic_preload,
+                     "start from the static solution just below the first bond failure (intact at once if none fails)"),
+        opt::number("preload_fraction", d.preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
         opt::integer("hold_steps", d.hold_steps, 0, 1'000'000'000, "least steps at full load before an intact verdict"),
         opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "",
                     "at rest when the kinetic energy <= this × the work of the loads"),
@@ -216,6 +242,8 @@ const OptionTable& bonded_particles_options() {
         opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
         opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
                     "pieces with fewer elements are fines, attached to the nearest piece"),
+        opt::integer("min_piece_elements", d.min_piece_elements, 1, 100'000'000,
+                     "pieces of fewer elements are fines too (an absolute floor on the fragment size)"),
     };
   }();
   return t;
@@ -238,12 +266,15 @@ BpmOptions bpm_options_from_config(const Config& cfg) {
   o.contact_tolerance_factor = r.number("contact_tolerance_factor");
   o.damping = r.number("damping");
   o.ramp_steps = r.integer("ramp_steps");
+  o.elastic_preload = r.boolean("elastic_preload");
+  o.preload_fraction = r.number("preload_fraction");
   o.hold_steps = r.integer("hold_steps");
   o.ke_tolerance = r.number("ke_tolerance");
   o.post_split_steps = r.integer("post_split_steps");
   o.max_steps = r.integer("max_steps");
   o.check_interval = r.integer("check_interval");
   o.min_child_fraction = r.number("min_child_fraction");
+  o.min_piece_elements = r.integer("min_piece_elements");
   try {
     validate(o);
   } catch (const std::invalid_argument& e) {
@@ -267,6 +298,7 @@ void validate(const BpmOptions& o) {
           "step counts must be >= 1 (hold_steps, post_split_steps >= 0)");
   require(o.ke_tolerance >= 0, "ke_tolerance must be >= 0");
   require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
+  require(o.min_piece_elements >= 1, "min_piece_elements must be >= 1");
 }
 
 double bpm_crush_estimate(int dimension, double sigma, double d) {
@@ -396,8 +428,8 @@ BreakageAnalysis BondedParticlesModel::analyse(const Grain& g, const Material& m
   steps = r.steps;
   broken = sys.broken();
   if (r.split) {
-    PointClusters pc = clusters_of(arr, sys.intact(), o_.min_child_fraction);
-    if (pc.clusters < 2 && !r.intact_at_split.empty()) pc = clusters_of(arr, r.intact_at_split, o_.min_child_fraction);
+    PointClusters pc = clusters_of(arr, sys.intact(), o_.min_child_fraction, o_.min_piece_elements);
+    if (pc.clusters < 2 && !r.intact_at_split.empty()) pc = clusters_of(arr, r.intact_at_split, o_.min_child_fraction, o_.min_piece_elements);
     pc.frame = frame;
     force_at_split = r.lambda * a.load;
     pieces = pc.clusters;
@@ -452,7 +484,7 @@ BpmCrushResult bpm_crush_single_grain(const Shape& shape, const Material& m, con
   res.outcome = r.outcome;
   res.split = r.split;
   if (r.split) res.force = r.lambda * F0;
-  res.clusters = clusters_of(arr, sys.intact(), o.min_child_fraction);
+  res.clusters = clusters_of(arr, sys.intact(), o.min_child_fraction, o.min_piece_elements);
   res.pieces = res.split ? res.clusters.clusters : 1;
   return res;
 }

@@ -27,8 +27,12 @@
 //   does not jump (figure inner_pore_volume_m3 = N·(A_cell − A_e)).
 // - Loads: each contact force (body frame) acts on the elements within zone_radius_factor
 //   element diameters of the element nearest the contact point; the zone of the largest
-//   force is fixed. All forces grow together over ramp_steps steps, then are held.
-// - Stop: split (two components with >= min_child_fraction of the elements each, then
+//   force is fixed. All forces grow together over ramp_steps steps, then are held; with
+//   elastic_preload the ramp starts from the static state at preload_fraction of the load
+//   that breaks the first bond (a grain whose static state breaks no bond at the full load
+//   is intact at once).
+// - Stop: split (two components with >= min_child_fraction of the elements and at least
+//   min_piece_elements elements each, then
 //   post_split_steps more), intact (full load held >= hold_steps and kinetic energy <=
 //   ke_tolerance × the work of the loads), or max_steps (outcome step_limit).
 #pragma once
@@ -61,13 +65,16 @@ struct BpmOptions {
   double zone_radius_factor = 1.0;        // "zone_radius_factor", element diameters
   double contact_tolerance_factor = 2.0;  // "contact_tolerance_factor", element diameters
   double damping = 0.7;                   // "damping": local damping coefficient α
-  long ramp_steps = 3000;                 // "ramp_steps"
+  long ramp_steps = 12000;                // "ramp_steps"
+  bool elastic_preload = true;            // "elastic_preload"
+  double preload_fraction = 0.9;          // "preload_fraction"
   long hold_steps = 500;                  // "hold_steps"
   double ke_tolerance = 1e-4;             // "ke_tolerance"
   long post_split_steps = 200;            // "post_split_steps"
   long max_steps = 200000;                // "max_steps"
   long check_interval = 10;               // "check_interval"
   double min_child_fraction = 0.03;       // "min_child_fraction"
+  long min_piece_elements = 1;            // "min_piece_elements": smaller components are fines
 };
 
 const OptionTable& bonded_particles_options();

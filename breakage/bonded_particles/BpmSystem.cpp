@@ -294,6 +294,130 @@ int System::step(double dt, double lambda, double alpha) {
   return broke;
 }
 
+void System::bond_forces(const std::vector<Vec3>& u, const std::vector<Vec3>& th, std::vector<Vec3>& f,
+                         std::vector<Vec3>& m) const {
+  const std::size_t n = a_.size();
+  f.assign(n, {});
+  m.assign(n, {});
+  const double r = 0.5 * a_.d;
+  const double KnA = law_.kn * area_, KsA = law_.ks * area_, KnI = law_.kn * inertia_, KsJ = law_.ks * polar_;
+  for (std::size_t b = 0; b < a_.bonds.size(); ++b) {
+    if (!intact_[b]) continue;
+    const Bond& B = a_.bonds[b];
+    const Vec3 nr = B.n * r;
+    const Vec3 delta = (u[B.j] - cross(th[B.j], nr)) - (u[B.i] + cross(th[B.i], nr));
+    const double dn = dot(delta, B.n);
+    const Vec3 ds = delta - B.n * dn;
+    const Vec3 dth = th[B.j] - th[B.i];
+    const double tw = dot(dth, B.n);
+    const Vec3 bend = dth - B.n * tw;
+    const Vec3 Fi = B.n * (KnA * dn) + ds * KsA;
+    const Vec3 Mr = bend * KnI + B.n * (KsJ * tw);
+    f[B.i] += Fi;
+    f[B.j] -= Fi;
+    m[B.i] += cross(nr, Fi) + Mr;
+    m[B.j] += cross(nr, Fi) - Mr;
+  }
+}
+
+double System::stress_ratio(const std::vector<Vec3>& u, const std::vector<Vec3>& th) const {
+  const double r = 0.5 * a_.d, R = law_.radius;
+  double worst = 0;
+  for (std::size_t b = 0; b < a_.bonds.size(); ++b) {
+    if (!intact_[b]) continue;
+    const Bond& B = a_.bonds[b];
+    const Vec3 nr = B.n * r;
+    const Vec3 delta = (u[B.j] - cross(th[B.j], nr)) - (u[B.i] + cross(th[B.i], nr));
+    const double dn = dot(delta, B.n);
+    const Vec3 ds = delta - B.n * dn;
+    const Vec3 dth = th[B.j] - th[B.i];
+    const double tw = dot(dth, B.n);
+    const Vec3 bend = dth - B.n * tw;
+    const double sigma = law_.kn * dn + law_.kn * R * norm(bend);
+    const double tau = law_.ks * norm(ds) + law_.ks * R * std::abs(tw);
+    worst = std::max({worst, sigma / law_.normal_strength, tau / law_.shear_strength});
+  }
+  return worst;
+}
+
+int System::static_unit_solution(double tol, int max_iter) {
+  // K x = F with K x = −(bond forces of x); unknowns: translations and rotations of the free
+  // elements. Jacobi preconditioner from each element's bond stiffness sums.
+  const std::size_t n = a_.size();
+  const double r = 0.5 * a_.d;
+  const double KnA = law_.kn * area_, KsA = law_.ks * area_, KnI = law_.kn * inertia_, KsJ = law_.ks * polar_;
+  std::vector<double> pt(n, 0.0), pr(n, 0.0);
+  for (std::size_t b = 0; b < a_.bonds.size(); ++b) {
+    if (!intact_[b]) continue;
+    for (auto e : {a_.bonds[b].i, a_.bonds[b].j}) {
+      pt[e] += KnA + KsA;
+      pr[e] += KnI + KsJ + KsA * r * r;
+    }
+  }
+  const bool two = a_.dimension == 2;
+  auto mask = [&](std::vector<Vec3>& x, std::vector<Vec3>& t) {  // fixed elements, 2D plane
+    for (std::size_t i = 0; i < n; ++i) {
+      if (fixed_[i]) x[i] = t[i] = {};
+      if (two) x[i].z = 0, t[i].x = t[i].y = 0;
+    }
+  };
+  std::vector<Vec3> x(n), t(n), rx = fext_, rt(n), zx(n), zt(n), px(n), ptt(n), qx, qt;
+  mask(rx, rt);
+  auto precond = [&]() {
+    for (std::size_t i = 0; i < n; ++i) {
+      zx[i] = pt[i] > 0 ? rx[i] / pt[i] : Vec3{};
+      zt[i] = pr[i] > 0 ? rt[i] / pr[i] : Vec3{};
+    }
+  };
+  auto dotv = [&](const std::vector<Vec3>& a1, const std::vector<Vec3>& a2, const std::vector<Vec3>& b1,
+                  const std::vector<Vec3>& b2) {
+    double s = 0;
+    for (std::size_t i = 0; i < n; ++i) s += dot(a1[i], b1[i]) + dot(a2[i], b2[i]);
+    return s;
+  };
+  precond();
+  px = zx, ptt = zt;
+  double rz = dotv(rx, rt, zx, zt);
+  const double b0 = std::sqrt(dotv(rx, rt, rx, rt));
+  int it = 0;
+  bool converged = b0 == 0;
+  for (; it < max_iter && !converged; ++it) {
+    bond_forces(px, ptt, qx, qt);
+    for (std::size_t i = 0; i < n; ++i) qx[i] = -qx[i], qt[i] = -qt[i];
+    mask(qx, qt);
+    const double pq = dotv(px, ptt, qx, qt);
+    if (!(pq > 0)) break;  // a mechanism: a piece not held by the fixed zone
+    const double alpha = rz / pq;
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] += px[i] * alpha;
+      t[i] += ptt[i] * alpha;
+      rx[i] -= qx[i] * alpha;
+      rt[i] -= qt[i] * alpha;
+    }
+    converged = std::sqrt(dotv(rx, rt, rx, rt)) <= tol * b0;
+    precond();
+    const double rz1 = dotv(rx, rt, zx, zt);
+    const double beta = rz1 / rz;
+    rz = rz1;
+    for (std::size_t i = 0; i < n; ++i) {
+      px[i] = zx[i] + px[i] * beta;
+      ptt[i] = zt[i] + ptt[i] * beta;
+    }
+  }
+  u1_ = x;
+  th1_ = t;
+  unit_ratio_ = stress_ratio(x, t);
+  return converged ? it : -1;
+}
+
+void System::start_from_static(double lambda0) {
+  for (std::size_t i = 0; i < a_.size(); ++i) {
+    u_[i] = u1_[i] * lambda0;
+    th_[i] = th1_[i] * lambda0;
+    v_[i] = w_[i] = {};
+  }
+}
+
 double System::kinetic_energy() const {
   double e = 0;
   for (std::size_t i = 0; i < a_.size(); ++i) e += 0.5 * (mass_ * dot(v_[i], v_[i]) + rot_inertia_ * dot(w_[i], w_[i]));
@@ -335,12 +459,12 @@ Components components(const Array& a, const std::vector<char>& intact) {
   return c;
 }
 
-int major_count(const Components& c, double min_fraction) {
+int major_count(const Components& c, double min_fraction, long min_elements) {
   long total = 0;
   for (long s : c.size) total += s;
   int k = 0;
   for (long s : c.size)
-    if (static_cast<double>(s) >= min_fraction * static_cast<double>(total) && s > 0) ++k;
+    if (static_cast<double>(s) >= min_fraction * static_cast<double>(total) && s >= std::max(1L, min_elements)) ++k;
   return k;
 }
 

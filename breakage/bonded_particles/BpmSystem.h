@@ -85,6 +85,14 @@ class System {
   // strength (tension σ = F_n/A + |M_b| R̄/I; shear τ = |F_s|/A + |M_t| R̄/J). Returns the
   // number of bonds broken in this step.
   int step(double dt, double lambda, double alpha);
+  // The static state under the loads at λ = 1 with every bond intact (linear elasticity;
+  // preconditioned conjugate gradients to a relative residual `tol`), and the largest ratio
+  // of a bond's peak stress to its strength in that state: the bonds are linear, so the first
+  // bond breaks at λ = 1 / ratio. Returns the iterations (−1: not converged).
+  int static_unit_solution(double tol, int max_iter);
+  double unit_stress_ratio() const { return unit_ratio_; }
+  // Start from λ0 × the static state, at rest.
+  void start_from_static(double lambda0);
   double kinetic_energy() const;
   // Work of the applied loads at the current displacement (λ·F·u).
   double load_work(double lambda) const;
@@ -99,6 +107,12 @@ class System {
   double mass_ = 0, rot_inertia_ = 0;
   std::vector<Vec3> u_, v_, th_, w_, f_, m_, fext_;
   std::vector<char> fixed_, intact_;
+  std::vector<Vec3> u1_, th1_;  // static state at λ = 1
+  double unit_ratio_ = 0;
+  // Forces and moments of the intact bonds at displacements u, rotations th (no breaking).
+  void bond_forces(const std::vector<Vec3>& u, const std::vector<Vec3>& th, std::vector<Vec3>& f,
+                   std::vector<Vec3>& m) const;
+  double stress_ratio(const std::vector<Vec3>& u, const std::vector<Vec3>& th) const;
   long broken_count_ = 0;
 };
 
@@ -110,7 +124,7 @@ struct Components {
   int count = 0;
 };
 Components components(const Array& a, const std::vector<char>& intact);
-// Components holding at least `min_fraction` of the elements.
-int major_count(const Components& c, double min_fraction);
+// Components holding at least `min_fraction` of the elements and at least `min_elements`.
+int major_count(const Components& c, double min_fraction, long min_elements = 1);
 
 }  // namespace crumble::bpm
