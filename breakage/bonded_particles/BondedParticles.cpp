@@ -51,11 +51,11 @@ RunResult run(bpm::System& sys, const bpm::Array& a, double rate, double lambda_
     }
   }
   const double dt = sys.stable_dt();
-  long full_at = -1, split_at = -1, broken_seen = 0;
+  long full_at = -1, split_at = -1, broken_seen = 0, last_break = 0;
   for (long n = 1;; ++n) {
     const double lambda = split_at >= 0 ? r.lambda : std::min(lambda_max, lambda0 + rate * static_cast<double>(n));
     if (lambda >= lambda_max && full_at < 0) full_at = n;
-    sys.step(dt, lambda, o.damping);
+    if (sys.step(dt, lambda, o.damping) > 0) last_break = n;
     r.steps = n;
     r.lambda = lambda;
     if (split_at >= 0) {
@@ -76,7 +76,9 @@ RunResult run(bpm::System& sys, const bpm::Array& a, double rate, double lambda_
       }
       if (full_at >= 0 && n - full_at >= o.hold_steps) {
         const double w = std::abs(sys.load_work(lambda));
-        if (sys.kinetic_energy() <= o.ke_tolerance * w) {
+        // At rest, or no bond broken for quiet_steps at the full load (a loose chip under a
+        // contact may keep moving without the grain coming apart).
+        if (sys.kinetic_energy() <= o.ke_tolerance * w || n - std::max(full_at, last_break) >= o.quiet_steps) {
           r.outcome = "intact";
           break;
         }
@@ -236,6 +238,8 @@ const OptionTable& bonded_particles_options() {
         opt::integer("hold_steps", d.hold_steps, 0, 1'000'000'000, "least steps at full load before an intact verdict"),
         opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "",
                     "at rest when the kinetic energy <= this × the work of the loads"),
+        opt::integer("quiet_steps", d.quiet_steps, 1, 1'000'000'000,
+                     "intact too when no bond has broken for this many steps at the full load"),
         opt::integer("post_split_steps", d.post_split_steps, 0, 1'000'000'000,
                      "steps integrated at the split load after the first split"),
         opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
@@ -270,6 +274,7 @@ BpmOptions bpm_options_from_config(const Config& cfg) {
   o.preload_fraction = r.number("preload_fraction");
   o.hold_steps = r.integer("hold_steps");
   o.ke_tolerance = r.number("ke_tolerance");
+  o.quiet_steps = r.integer("quiet_steps");
   o.post_split_steps = r.integer("post_split_steps");
   o.max_steps = r.integer("max_steps");
   o.check_interval = r.integer("check_interval");
@@ -297,6 +302,7 @@ void validate(const BpmOptions& o) {
               o.check_interval >= 1,
           "step counts must be >= 1 (hold_steps, post_split_steps >= 0)");
   require(o.ke_tolerance >= 0, "ke_tolerance must be >= 0");
+  require(o.quiet_steps >= 1, "quiet_steps must be >= 1");
   require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
   require(o.min_piece_elements >= 1, "min_piece_elements must be >= 1");
 }

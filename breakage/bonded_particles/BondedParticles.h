@@ -34,7 +34,8 @@
 // - Stop: split (two components with >= min_child_fraction of the elements and at least
 //   min_piece_elements elements each, then
 //   post_split_steps more), intact (full load held >= hold_steps and kinetic energy <=
-//   ke_tolerance × the work of the loads), or max_steps (outcome step_limit).
+//   ke_tolerance × the work of the loads, or no bond broken for quiet_steps at the full
+//   load), or max_steps (outcome step_limit).
 #pragma once
 #include <memory>
 #include <string>
@@ -70,8 +71,9 @@ struct BpmOptions {
   double preload_fraction = 0.9;          // "preload_fraction"
   long hold_steps = 500;                  // "hold_steps"
   double ke_tolerance = 1e-4;             // "ke_tolerance"
+  long quiet_steps = 3000;                // "quiet_steps"
   long post_split_steps = 200;            // "post_split_steps"
-  long max_steps = 200000;                // "max_steps"
+  long max_steps = 100000;                // "max_steps"
   long check_interval = 10;               // "check_interval"
   double min_child_fraction = 0.03;       // "min_child_fraction"
   long min_piece_elements = 1;            // "min_piece_elements": smaller components are fines
