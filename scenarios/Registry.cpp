@@ -13,6 +13,7 @@
 #if CRUMBLE_WITH_CGAL
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
+#include "breakage/bonded_particles/BondedParticles.h"
 #include "breakage/peridynamics/Peridynamics.h"
 #include "breakage/stress/StressModel.h"
 #include "geometry/level_set/LevelSetBuilder.h"
@@ -81,6 +82,7 @@ Table<ModelFactory>& breakage_models() {
     t.add({"stress", "average-stress criterion, Weibull strengths, planar split through the strongest contacts "
                      "(Harmon et al. 2020, eqs. 5-13, 18-20)",
            make_stress, stress::criterion_names(), {2, 3}, stress_options()});
+    t.add({"bonded_particles", "densely arrayed bonded particles with parallel bonds (the DA-BPM paper)", make_bonded_particles, {}, {2, 3}, bonded_particles_options()});
     return t;
   }();
   return t;

@@ -63,6 +63,10 @@ const std::map<std::string, std::string>& break_profile() {
       {"peridynamics", " --set breakage.gc0=3 --set breakage.weibull=false --set breakage.spacing_fraction=0.1"},
       // Harmon et al. 2020 Table 2's 35 MPa (von Mises) lowered to 5 MPa.
       {"stress", " --set breakage.strength=5e6"},
+      // DA-BPM bonds of 1 MPa instead of 30 MPa (a 1.5 mm disc then crushes at ≈ 2.4 kN/m),
+      // 8 elements across.
+      {"bonded_particles", " --set breakage.normal_strength=1e6 --set breakage.shear_strength=1e6"
+                           " --set breakage.elements_across=8"},
   };
   return p;
 }
