@@ -11,6 +11,7 @@
 #include "backends/ode/OdeEngine.h"
 #endif
 #if CRUMBLE_WITH_CGAL
+#include "breakage/block_beam/BlockBeam.h"
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
 #include "breakage/peridynamics/Peridynamics.h"
@@ -81,6 +82,9 @@ Table<ModelFactory>& breakage_models() {
     t.add({"stress", "average-stress criterion, Weibull strengths, planar split through the strongest contacts "
                      "(Harmon et al. 2020, eqs. 5-13, 18-20)",
            make_stress, stress::criterion_names(), {2, 3}, stress_options()});
+#if CRUMBLE_WITH_CGAL
+    t.add({"block_beam", "tetrahedral blocks joined by beams that break at their tensile or shear strength (Liu et al. 2019, §2.1, §2.3)", make_block_beam, {}, {3}, block_beam_options()});
+#endif
     return t;
   }();
   return t;
