@@ -30,9 +30,12 @@ struct TetMeshOptions {
 };
 
 // Tetrahedralises {x : sdf(x) < 0} inside the sphere of radius `bounding_radius` about the
-// origin with CGAL Mesh_3 (implicit mesh domain; no perturbation, exudation of slivers
-// without a time limit, so the result depends on the input only). Deterministic and
-// thread-safe. Throws std::invalid_argument for bad options and std::runtime_error when
+// origin with CGAL Mesh_3 (implicit mesh domain, refinement only: no perturbation, no
+// sliver exudation, no Lloyd/ODT smoothing). Deterministic and thread-safe: the random
+// initial points come from a generator seeded with opt.seed, and the optimisers are off
+// because CGAL 5.5's exuder gave a different mesh of the same sphere after other meshes
+// had been made (820 vs 821 cells; tests/unit/block_beam). Without exudation a few slivers
+// (flat but positive tetrahedra) remain; they are blocks like any other. Throws std::invalid_argument for bad options and std::runtime_error when
 // the mesher returns no cell.
 TetMesh tetrahedralise(const std::function<double(const Vec3&)>& sdf, double bounding_radius,
                        const TetMeshOptions& opt);
