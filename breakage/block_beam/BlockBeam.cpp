@@ -52,6 +52,8 @@ const OptionTable& block_beam_options() {
         opt::positive_below("rest_tolerance", d.rest_tolerance, 1, false, "",
                             "at rest when the largest out-of-balance force ≤ this × the largest block load"),
         opt::integer("post_split_steps", d.post_split_steps, 0, 1'000'000'000, "steps after the first split (load held)"),
+        opt::integer("quiet_steps", d.quiet_steps, 1, 1'000'000'000,
+                     "at full load, intact once no beam has broken for this many steps (loose blocks never rest)"),
         opt::integer("max_steps", d.max_steps, 1, 1'000'000'000, "steps per analysis at most (outcome step_limit)"),
         opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
         opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
@@ -78,6 +80,7 @@ BbOptions bb_options_from_config(const Config& cfg) {
   o.mass_factor = r.number("mass_factor");
   o.rest_tolerance = r.number("rest_tolerance");
   o.post_split_steps = r.integer("post_split_steps");
+  o.quiet_steps = r.integer("quiet_steps");
   o.max_steps = r.integer("max_steps");
   o.check_interval = r.integer("check_interval");
   o.min_child_fraction = r.number("min_child_fraction");
@@ -97,7 +100,7 @@ void validate(const BbOptions& o) {
   require(o.weibull_modulus >= 0, "weibull_modulus must be >= 0");
   require(o.threshold_factor >= 0, "threshold_factor must be >= 0");
   require(o.zone_radius_factor >= 0, "zone_radius_factor must be >= 0");
-  require(o.ramp_steps >= 1 && o.max_steps >= 1 && o.check_interval >= 1 && o.post_split_steps >= 0,
+  require(o.ramp_steps >= 1 && o.max_steps >= 1 && o.quiet_steps >= 1 && o.check_interval >= 1 && o.post_split_steps >= 0,
           "ramp_steps, max_steps, check_interval >= 1 and post_split_steps >= 0");
   require(o.damping >= 0 && o.damping < 1, "damping must lie in [0, 1)");
   require(o.mass_factor >= 0.3, "mass_factor must be >= 0.3");
@@ -246,10 +249,10 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
   bool split = false;
   long split_step = -1;
   double lambda = 0;
-  long broken_seen = 0;
+  long broken_seen = 0, last_break = 0;
   for (long n = 1; n <= o_.max_steps; ++n) {
     if (split_step < 0) lambda = std::min(1.0, static_cast<double>(n) / static_cast<double>(o_.ramp_steps));
-    sys.step(lambda, o_.damping);
+    if (sys.step(lambda, o_.damping) > 0) last_break = n;
     steps = n;
     if (split_step >= 0) {
       if (n - split_step >= o_.post_split_steps) break;
@@ -269,7 +272,7 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
         continue;
       }
     }
-    if (lambda >= 1.0 && sys.unbalance() <= o_.rest_tolerance) {
+    if (lambda >= 1.0 && (sys.unbalance() <= o_.rest_tolerance || n - std::max(last_break, o_.ramp_steps) >= o_.quiet_steps)) {
       outcome = "intact";
       break;
     }

@@ -26,7 +26,9 @@
 // - Time integration: dynamic relaxation (quasi-static, as the 70 mm/min loading of §4 is):
 //   fictitious block masses from the stiffness (stable unit step), local non-viscous damping
 //   (Cundall) of `damping`. Intact: at full load once the largest out-of-balance force of a
-//   free block is below rest_tolerance × the largest block load. Split: the first check
+//   free block is below rest_tolerance × the largest block load, or once no beam has broken
+//   for quiet_steps steps (a loose block pushed off the grain by its contact load never comes
+//   to rest: the engine's contact would have let go of it). Split: the first check
 //   where two connected block sets each hold ≥ min_child_fraction of the volume, followed
 //   by post_split_steps steps (load held) so the cracks complete.
 // - Pieces: connected block sets over intact beams; sets below min_child_fraction of the
@@ -62,6 +64,7 @@ struct BbOptions {
   double mass_factor = 1.0;        // "mass_factor": fictitious mass / stiffness row sum
   double rest_tolerance = 1e-3;    // "rest_tolerance"
   long post_split_steps = 500;     // "post_split_steps"
+  long quiet_steps = 2000;         // "quiet_steps": at full load, intact after this many steps without a beam breaking
   long max_steps = 100000;         // "max_steps"
   long check_interval = 20;        // "check_interval"
   double min_child_fraction = 0.03;  // "min_child_fraction"
