@@ -201,7 +201,16 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
   if (loads.size() < 2) return finish("no_load");
 
   // Blocks and beams (Liu et al. 2019 §2.1, §2.3).
-  const bb::Blocks B = bb::make_blocks(bb_mesh(*g.shape, o_));
+  // A shape the mesher cannot fill (or a degenerate block) is an outcome, not an error: the
+  // grain stays as it is and the run goes on.
+  bb::Blocks B;
+  try {
+    B = bb::make_blocks(bb_mesh(*g.shape, o_));
+  } catch (const std::runtime_error&) {
+    return finish("mesh_failed");
+  } catch (const std::invalid_argument&) {
+    return finish("mesh_failed");
+  }
   blocks = static_cast<long>(B.centroid.size());
   beams = static_cast<long>(B.beams.size());
   if (blocks < o_.min_blocks) return finish("too_few_blocks");

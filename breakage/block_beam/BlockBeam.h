@@ -90,7 +90,8 @@ class BlockBeamModel final : public BreakageModel {
   // The parent's strengths; the threshold for the child's size.
   void inherit_strength(const Grain& parent, Grain& child, const Material& m, Rng& rng) const override;
   // Outcomes: split (broken), intact, no_load (fewer than two contacts with force),
-  // too_few_blocks, step_limit, split_into_fines. Figures: blocks, beams, steps,
+  // too_few_blocks, mesh_failed (Mesh_3 gave no cell or a flat block), step_limit,
+  // split_into_fines. Figures: blocks, beams, steps,
   // broken_beams, force_at_split_N (largest contact force × load factor at the split, 0
   // otherwise). The fracture is a PointClusters in the body frame: per piece a copy of the
   // vertices of its blocks (on_surface: on the grain's surface) and its block centroids;
