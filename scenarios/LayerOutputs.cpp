@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <sstream>
 
@@ -10,16 +11,17 @@
 
 namespace crumble {
 
-void LoadDisplacementWriter::on_sample(const Simulation&, const RunState& s) {
-  if (s.step == last_step_ || !std::isfinite(s.platen_height) || !std::isfinite(s.platen_force)) return;
-  last_step_ = s.step;
-  h_.push_back(s.platen_height);
-  f_.push_back(s.platen_force);
-}
-
-void LoadDisplacementWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary& sum) {
-  on_sample(sim, s);
-  const LoadDisplacement ld = load_displacement(h_, f_);
+void LoadDisplacementWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum) {
+  // From the finished series.csv (platen height and force), as the single-grain writer does:
+  // a resumed run's series holds the rows of the run it continues, so the curve is whole.
+  std::vector<double> h, f;
+  const auto rows = read_csv(dir_ + "/series.csv");
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (rows[i].size() >= 12) {
+      h.push_back(std::atof(rows[i][10].c_str()));
+      f.push_back(std::atof(rows[i][11].c_str()));
+    }
+  const LoadDisplacement ld = load_displacement(h, f);
   std::ostringstream os;
   os << std::setprecision(10) << "platen_displacement_m,platen_force_N\n";
   for (std::size_t i = 0; i < ld.load.size(); ++i) os << ld.displacement[i] << ',' << ld.load[i] << '\n';

@@ -10,19 +10,16 @@
 
 namespace crumble {
 
-// load_displacement.csv (platen displacement from its first sample, platen force) from every
-// sample of a run; summary.json gets displacement_at_max_force_m. (Single-grain scenes have
+// load_displacement.csv (platen displacement from its first sample, platen force) from the
+// run's series.csv (so a resumed run gets the whole curve); summary.json gets displacement_at_max_force_m. (Single-grain scenes have
 // their own writer of the same file, scenarios/Tools.cpp.)
 class LoadDisplacementWriter : public Observer {
  public:
   explicit LoadDisplacementWriter(std::string dir) : dir_(std::move(dir)) {}
-  void on_sample(const Simulation&, const RunState& s) override;
   void on_finish(const Simulation&, const RunState& s, RunSummary& sum) override;
 
  private:
   std::string dir_;
-  std::vector<double> h_, f_;
-  long last_step_ = -1;
 };
 
 // psd_layers.csv (output.psd_layers = N > 0): the grains of the initial packing are put into
