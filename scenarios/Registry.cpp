@@ -11,6 +11,7 @@
 #include "backends/ode/OdeEngine.h"
 #endif
 #if CRUMBLE_WITH_CGAL
+#include "breakage/block_beam/BlockBeam.h"
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #endif
 #include "breakage/bonded_particles/BondedParticles.h"
@@ -83,6 +84,9 @@ Table<ModelFactory>& breakage_models() {
                      "(Harmon et al. 2020, eqs. 5-13, 18-20)",
            make_stress, stress::criterion_names(), {2, 3}, stress_options()});
     t.add({"bonded_particles", "densely arrayed bonded particles with parallel bonds (the DA-BPM paper)", make_bonded_particles, {}, {2, 3}, bonded_particles_options()});
+#if CRUMBLE_WITH_CGAL
+    t.add({"block_beam", "tetrahedral blocks joined by beams that break at their tensile or shear strength (Liu et al. 2019, §2.1, §2.3)", make_block_beam, {}, {3}, block_beam_options()});
+#endif
     return t;
   }();
   return t;

@@ -315,6 +315,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   }
   sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
   sc.output.plots = oc.boolean("plots", true);
+  sc.output.psd_layers = oc.integer("psd_layers", 0, 0, 100);  // Liu et al. 2019 §4.3.3: sieve curves per layer
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
   if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))
     oc.fail("checkpoint_every", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "

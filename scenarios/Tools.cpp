@@ -33,6 +33,7 @@
 #include "scenarios/ShapeSpec.h"
 #include "scenarios/VtkWriter.h"
 #include "scenarios/Stages.h"
+#include "scenarios/LayerOutputs.h"
 #include "scenarios/Writers.h"
 
 namespace crumble {
@@ -275,6 +276,8 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
     sim.add_observer(std::make_shared<CheckpointWriter>(out, sc.name, sc.output.checkpoint_every,
                                                         sc.output.checkpoint_every_s, checkpoint_info));
   if (sim.grains().size() == 1 && sim.model().active()) sim.add_observer(std::make_shared<CrushingRecorder>(out));
+  else sim.add_observer(std::make_shared<LoadDisplacementWriter>(out));
+  if (sc.output.psd_layers > 0) sim.add_observer(std::make_shared<LayerPsdWriter>(out, static_cast<int>(sc.output.psd_layers)));
   if (sim.container().open) sim.add_observer(std::make_shared<ProductWriter>(out, sc.packing.scene_figures));
 }
 
