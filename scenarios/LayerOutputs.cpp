@@ -5,27 +5,41 @@
 #include <cstdlib>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/Analysis.h"
 #include "scenarios/Writers.h"
 
 namespace crumble {
 
-void LoadDisplacementWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum) {
-  // From the finished series.csv (platen height and force), as the single-grain writer does:
-  // a resumed run's series holds the rows of the run it continues, so the curve is whole.
+LoadDisplacement write_load_displacement_csv(const std::string& dir) {
+  // From the finished series.csv (platen height and force, found by their column names): a
+  // resumed run's series holds the rows of the run it continues, so the curve is whole.
   std::vector<double> h, f;
-  const auto rows = read_csv(dir_ + "/series.csv");
+  const auto rows = read_csv(dir + "/series.csv");
+  if (rows.empty()) return {};
+  const auto& head = rows.front();
+  const auto col = [&](const char* name) {
+    return static_cast<std::size_t>(std::find(head.begin(), head.end(), name) - head.begin());
+  };
+  const std::size_t ch = col("platen_height_m"), cf = col("platen_force_N");
+  if (ch >= head.size() || cf >= head.size())
+    throw std::runtime_error(dir + "/series.csv has no platen_height_m or platen_force_N column");
   for (std::size_t i = 1; i < rows.size(); ++i)
-    if (rows[i].size() >= 12) {
-      h.push_back(std::atof(rows[i][10].c_str()));
-      f.push_back(std::atof(rows[i][11].c_str()));
+    if (rows[i].size() > std::max(ch, cf)) {
+      h.push_back(std::atof(rows[i][ch].c_str()));
+      f.push_back(std::atof(rows[i][cf].c_str()));
     }
-  const LoadDisplacement ld = load_displacement(h, f);
+  LoadDisplacement ld = load_displacement(h, f);
   std::ostringstream os;
   os << std::setprecision(10) << "platen_displacement_m,platen_force_N\n";
   for (std::size_t i = 0; i < ld.load.size(); ++i) os << ld.displacement[i] << ',' << ld.load[i] << '\n';
-  write_file_atomic(dir_ + "/load_displacement.csv", os.str());
+  write_file_atomic(dir + "/load_displacement.csv", os.str());
+  return ld;
+}
+
+void LoadDisplacementWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum) {
+  const LoadDisplacement ld = write_load_displacement_csv(dir_);
   if (!ld.load.empty()) {
     sum.extra["displacement_at_max_force_m"] = ld.displacement_at_peak;
     sum.extra["max_platen_force_N"] = ld.peak_load;

@@ -5,14 +5,18 @@
 #include <string>
 #include <vector>
 
+#include "core/Analysis.h"
 #include "core/Observer.h"
 #include "core/Simulation.h"
 
 namespace crumble {
 
-// load_displacement.csv (platen displacement from its first sample, platen force) from the
-// run's series.csv (so a resumed run gets the whole curve); summary.json gets displacement_at_max_force_m. (Single-grain scenes have
-// their own writer of the same file, scenarios/Tools.cpp.)
+// Writes DIR/load_displacement.csv (platen displacement from its first sample, platen force)
+// from the run's finished DIR/series.csv, so a resumed run gets the whole curve; returns it.
+LoadDisplacement write_load_displacement_csv(const std::string& dir);
+
+// load_displacement.csv of a multi-grain run; summary.json gets displacement_at_max_force_m and
+// max_platen_force_N. (Single-grain scenes write the same file from their own recorder.)
 class LoadDisplacementWriter : public Observer {
  public:
   explicit LoadDisplacementWriter(std::string dir) : dir_(std::move(dir)) {}

@@ -66,19 +66,7 @@ class CrushingRecorder : public Observer {
   void on_finish(const Simulation&, const RunState&, RunSummary& sum) override {
     sum.extra["diameter_m"] = d_;
     sum.extra["max_platen_force_N"] = max_force_;
-    // load_displacement.csv from the finished series.csv (platen height and force).
-    std::vector<double> h, f;
-    const auto rows = read_csv(dir_ + "/series.csv");
-    for (std::size_t i = 1; i < rows.size(); ++i)
-      if (rows[i].size() >= 12) {
-        h.push_back(std::atof(rows[i][10].c_str()));
-        f.push_back(std::atof(rows[i][11].c_str()));
-      }
-    const LoadDisplacement ld = load_displacement(h, f);
-    std::ostringstream os;
-    os << std::setprecision(10) << "platen_displacement_m,platen_force_N\n";
-    for (std::size_t i = 0; i < ld.load.size(); ++i) os << ld.displacement[i] << ',' << ld.load[i] << '\n';
-    write_file_atomic(dir_ + "/load_displacement.csv", os.str());
+    const LoadDisplacement ld = write_load_displacement_csv(dir_);
     if (!ld.load.empty()) sum.extra["displacement_at_max_force_m"] = ld.displacement_at_peak;
     if (!done_) return;
     sum.extra["crushing_force_N"] = force_;
