@@ -294,6 +294,26 @@ int System::step(double dt, double lambda, double alpha) {
   return broke;
 }
 
+namespace {
+// Deformation of a parallel bond between the contact points of its two elements (radius r
+// along the bond normal): normal and shear opening, twist and bending rotation.
+struct BondDeformation {
+  Vec3 nr, ds, bend;
+  double dn = 0, tw = 0;
+};
+BondDeformation deformation(const Bond& B, double r, const std::vector<Vec3>& u, const std::vector<Vec3>& th) {
+  BondDeformation d;
+  d.nr = B.n * r;
+  const Vec3 delta = (u[B.j] - cross(th[B.j], d.nr)) - (u[B.i] + cross(th[B.i], d.nr));
+  d.dn = dot(delta, B.n);
+  d.ds = delta - B.n * d.dn;
+  const Vec3 dth = th[B.j] - th[B.i];
+  d.tw = dot(dth, B.n);
+  d.bend = dth - B.n * d.tw;
+  return d;
+}
+}  // namespace
+
 void System::bond_forces(const std::vector<Vec3>& u, const std::vector<Vec3>& th, std::vector<Vec3>& f,
                          std::vector<Vec3>& m) const {
   const std::size_t n = a_.size();
@@ -304,19 +324,13 @@ void System::bond_forces(const std::vector<Vec3>& u, const std::vector<Vec3>& th
   for (std::size_t b = 0; b < a_.bonds.size(); ++b) {
     if (!intact_[b]) continue;
     const Bond& B = a_.bonds[b];
-    const Vec3 nr = B.n * r;
-    const Vec3 delta = (u[B.j] - cross(th[B.j], nr)) - (u[B.i] + cross(th[B.i], nr));
-    const double dn = dot(delta, B.n);
-    const Vec3 ds = delta - B.n * dn;
-    const Vec3 dth = th[B.j] - th[B.i];
-    const double tw = dot(dth, B.n);
-    const Vec3 bend = dth - B.n * tw;
-    const Vec3 Fi = B.n * (KnA * dn) + ds * KsA;
-    const Vec3 Mr = bend * KnI + B.n * (KsJ * tw);
+    const BondDeformation d = deformation(B, r, u, th);
+    const Vec3 Fi = B.n * (KnA * d.dn) + d.ds * KsA;
+    const Vec3 Mr = d.bend * KnI + B.n * (KsJ * d.tw);
     f[B.i] += Fi;
     f[B.j] -= Fi;
-    m[B.i] += cross(nr, Fi) + Mr;
-    m[B.j] += cross(nr, Fi) - Mr;
+    m[B.i] += cross(d.nr, Fi) + Mr;
+    m[B.j] += cross(d.nr, Fi) - Mr;
   }
 }
 
@@ -326,15 +340,9 @@ double System::stress_ratio(const std::vector<Vec3>& u, const std::vector<Vec3>&
   for (std::size_t b = 0; b < a_.bonds.size(); ++b) {
     if (!intact_[b]) continue;
     const Bond& B = a_.bonds[b];
-    const Vec3 nr = B.n * r;
-    const Vec3 delta = (u[B.j] - cross(th[B.j], nr)) - (u[B.i] + cross(th[B.i], nr));
-    const double dn = dot(delta, B.n);
-    const Vec3 ds = delta - B.n * dn;
-    const Vec3 dth = th[B.j] - th[B.i];
-    const double tw = dot(dth, B.n);
-    const Vec3 bend = dth - B.n * tw;
-    const double sigma = law_.kn * dn + law_.kn * R * norm(bend);
-    const double tau = law_.ks * norm(ds) + law_.ks * R * std::abs(tw);
+    const BondDeformation d = deformation(B, r, u, th);
+    const double sigma = law_.kn * d.dn + law_.kn * R * norm(d.bend);
+    const double tau = law_.ks * norm(d.ds) + law_.ks * R * std::abs(d.tw);
     worst = std::max({worst, sigma / law_.normal_strength, tau / law_.shear_strength});
   }
   return worst;
