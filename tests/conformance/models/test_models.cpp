@@ -17,6 +17,7 @@
 
 #include "core/Config.h"
 #include "scenarios/Registry.h"
+#include "tests/support/Contacts.h"
 #include "tests/support/Registered.h"
 
 using namespace crumble;
@@ -94,19 +95,9 @@ class ModelConformance : public ::testing::TestWithParam<Registered> {
     return g;
   }
 
-  Contact contact(const Grain& g, int wall, Vec3 offset, Vec3 force) const {
-    Contact c;
-    c.a = g.id;
-    c.b = -1;
-    c.wall = wall;
-    c.point = g.position + offset;
-    c.force = force;
-    c.normal = normalized(force);
-    return c;
-  }
   // Platen pressing down on the top, floor pushing up on the bottom.
   std::vector<Contact> diametral(const Grain& g, double P) const {
-    return {contact(g, kPlaten, up() * kR, up() * -P), contact(g, kFloor, up() * -kR, up() * P)};
+    return {wall_contact(g, kPlaten, up() * kR, up() * -P), wall_contact(g, kFloor, up() * -kR, up() * P)};
   }
 
   // What every analysis must give, broken or not.
@@ -153,11 +144,11 @@ TEST_P(ModelConformance, DegenerateInputGivesACountedOutcome) {
   const Vec3 top = up() * kR;
   const std::vector<std::pair<std::string, std::vector<Contact>>> cases = {
       {"no contact", {}},
-      {"one contact", {contact(g, kPlaten, top, up() * -P)}},
+      {"one contact", {wall_contact(g, kPlaten, top, up() * -P)}},
       {"two contacts at one point, opposite forces",
-       {contact(g, kPlaten, top, up() * -P), contact(g, kFloor, top, up() * P)}},
+       {wall_contact(g, kPlaten, top, up() * -P), wall_contact(g, kFloor, top, up() * P)}},
       {"two contacts at one point, the same force",
-       {contact(g, kPlaten, top, up() * -P), contact(g, kFloor, top, up() * -P)}},
+       {wall_contact(g, kPlaten, top, up() * -P), wall_contact(g, kFloor, top, up() * -P)}},
   };
   for (const auto& [what, cs] : cases) {
     BreakageAnalysis a;

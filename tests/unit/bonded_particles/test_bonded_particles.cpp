@@ -13,6 +13,7 @@
 #include "core/Config.h"
 #include "core/Rng.h"
 #include "scenarios/Registry.h"
+#include "tests/support/Contacts.h"
 
 namespace crumble {
 namespace {
@@ -172,21 +173,12 @@ BpmOptions test_options() {
   return o;
 }
 
-Contact contact(const Grain& g, int wall, const Vec3& offset, const Vec3& force) {
-  Contact c;
-  c.a = g.id;
-  c.b = -1;
-  c.wall = wall;
-  c.point = g.position + offset;
-  c.force = force;
-  c.normal = normalized(force);
-  return c;
-}
 
 // A pair of opposite forces P at the poles, in the world frame of a rotated grain.
 std::vector<Contact> diametral(const Grain& g, int dim, double P) {
   const Vec3 up = dim == 2 ? Vec3{0.6, 0.8, 0} : Vec3{0, 0.6, 0.8};
-  return {contact(g, kPlaten, up * 1e-3, up * -P), contact(g, kFloor, up * -1e-3, up * P)};
+  using testing_support::wall_contact;
+  return {wall_contact(g, kPlaten, up * 1e-3, up * -P), wall_contact(g, kFloor, up * -1e-3, up * P)};
 }
 
 Grain test_grain(int dim, const BreakageModel& m) {
