@@ -56,6 +56,9 @@ struct BreakageEvent {
 struct Timings {
   // fragments: building the children (FragmentBuilder::build) and putting them into the engine.
   double engine = 0, contacts = 0, screening = 0, analyses = 0, fragments = 0, observers = 0, guards = 0;
+  // loop: the rest of the loading loop's wall time (platen command, state read-out, scalar
+  // checks, breakage schedule): what the simulation loop adds to the engine's own stepping.
+  double loop = 0;
 };
 
 struct RunSummary {

@@ -346,6 +346,49 @@ Json phase_json(const LsdemBenchResult& r) {
           {"node_queries_per_step", r.mean_node_queries}};
 }
 
+
+// The loop phase of `bench engine` and `bench lsdem`: the same engine, from where the timed
+// adapter steps left it, stepped `steps` times by the simulation's own loop (Simulation::run:
+// the state read-out and scalar checks of every step, the guards of every sample; no
+// observers, no output). The benchmarks replace the scenario's loading by "none" (platen held
+// still, as in the adapter phase), so the two phases step the same scene. Its wall time per step against
+// the adapter's is the loop overhead (goal of issue 12: <= 10 % on every engine). The run's
+// breakage checks are timed apart (they are the model's work, not the loop's).
+Json loop_phase(Simulation& sim, long steps, double dt, double adapter_ms_per_step) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  RunSummary s;
+  sim.set_time_step(dt);
+  try {
+    s = sim.run();
+  } catch (const std::exception& e) {
+    return Json{{"error", e.what()}};
+  }
+  const double wall = std::chrono::duration<double>(clock::now() - t0).count();
+  const Timings& t = s.timings;
+  const double breakage = t.contacts + t.screening + t.analyses + t.fragments;
+  const double n = static_cast<double>(std::max(1L, s.steps));
+  // The adapter again, after the loop, from where the loop left the scene: a scene that
+  // slows down or speeds up as it settles falls on both sides of the loop phase alike.
+  Engine& eng = sim.engine();
+  const auto a0 = clock::now();
+  for (long k = 0; k < s.steps; ++k) eng.step(dt);
+  const double after_ms = 1e3 * std::chrono::duration<double>(clock::now() - a0).count() / n;
+  const double adapter_ms = 0.5 * (adapter_ms_per_step + after_ms);
+  Json j;
+  j["steps"] = s.steps;
+  j["ms_per_step"] = 1e3 * (wall - breakage) / n;
+  j["engine_ms_per_step"] = 1e3 * t.engine / n;
+  j["loop_ms_per_step"] = 1e3 * t.loop / n;
+  j["guards_ms_per_step"] = 1e3 * t.guards / n;
+  j["breakage_checks_s"] = breakage;
+  j["adapter_after_ms_per_step"] = after_ms;
+  j["loop_overhead_vs_adapter"] = adapter_ms > 0 ? 1e3 * (wall - breakage) / n / adapter_ms - 1 : 0.0;
+  j["loop_overhead_vs_engine_in_loop"] = t.engine > 0 ? (t.loop + t.guards + t.observers) / t.engine : 0.0;
+  if (s.steps < steps) j["note"] = "the scenario's loading ended after " + std::to_string(s.steps) + " steps";
+  return j;
+}
+
 // `crumble bench lsdem --scenario F`: the loose phase (grains falling) and the settled
 // packing of the scenario's scene, each over `steps` steps. YADE 2023.02a on the same scene
 // was measured once on this kind of machine (../shared/bench/README.md): ≈ 12 ms/step loose,
@@ -355,7 +398,10 @@ Json bench_lsdem(long steps, int threads, const std::string& file) {
   BuildOptions opt;
   opt.threads = threads;
   opt.source_name = file;
-  Scenario sc = build_scenario(load_scenario_file(file), opt);
+  Json doc = load_scenario_file(file);
+  doc["simulation"]["max_steps"] = steps;  // the loop phase: `steps` steps of Simulation::run,
+  doc["loading"] = Json{{"mode", "none"}};  // with the platen held still as in the adapter phase
+  Scenario sc = build_scenario(doc, opt);
   auto* eng = dynamic_cast<LsdemEngine*>(&sc.sim->engine());
   if (!eng) throw ConfigError(file + ": /engine/type", "bench lsdem needs an lsdem scenario");
   sc.packing.settle = false;
@@ -391,6 +437,7 @@ Json bench_lsdem(long steps, int threads, const std::string& file) {
   j["settled"] = phase_json(settled);
   j["yade_reference_ms_per_step"] = {{"loose", 12.0}, {"settled", 82.0}};
   j["speedup_vs_yade_reference"] = {{"loose", 12.0 / loose.ms_per_step}, {"settled", 82.0 / settled.ms_per_step}};
+  j["loop"] = loop_phase(*sc.sim, steps, dt, settled.ms_per_step);
   return j;
 }
 
@@ -430,8 +477,9 @@ RawScene raw_scene_of(const Simulation& sim, const Container& box, double dt) {
 // are timed through the adapter (Engine::step, and separately the read-out the Simulation
 // does: read_state + contacts) and, for bullet and ode, through the raw library on the same
 // bodies from the same state (RawBulletBench / RawOdeBench). The adapter runs with the raw
-// baseline's solver settings (fixed iterations: Bullet's tolerance exit off; ODE one point
-// per pair), so both do the same solver work.
+// baseline's solver settings (fixed iterations: Bullet's tolerance exit off; ODE the
+// scenario's contact points per pair in both), so both do the same solver work. Then the
+// same number of steps through the simulation's loop (loop_phase).
 Json bench_engine(const std::string& engine, long steps, long settle, int threads, const std::string& file_in) {
   const std::string file = file_in.empty() ? "scenarios/oedometer_rigid_quick.json" : file_in;
   Json doc = load_scenario_file(file);
@@ -441,9 +489,9 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   if (engine == "bullet") {
     doc["engine"]["solver_tolerance"] = 0;
     doc["engine"]["solver_residual"] = 0;
-  } else if (engine == "ode") {
-    doc["engine"]["contacts_per_pair"] = 1;
   }
+  doc["simulation"]["max_steps"] = steps;  // the loop phase: `steps` steps of Simulation::run,
+  doc["loading"] = Json{{"mode", "none"}};  // with the platen held still as in the adapter phase
   BuildOptions opt;
   opt.threads = threads;
   opt.source_name = file;
@@ -533,6 +581,7 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
     j["raw"] = nullptr;
     j["note"] = engine + " is crumble's own engine: there is no raw library to compare with";
   }
+  j["loop"] = loop_phase(*sc.sim, steps, dt, 1e3 * t_step / steps);
   return j;
 }
 

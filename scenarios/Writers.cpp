@@ -439,7 +439,7 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   j["time_breakdown_s"] = {{"engine", s.timings.engine},     {"contacts", s.timings.contacts},
                            {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
                            {"fragments", s.timings.fragments}, {"guards", s.timings.guards},
-                           {"output", s.timings.observers}};
+                           {"output", s.timings.observers}, {"loop", s.timings.loop}};
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)

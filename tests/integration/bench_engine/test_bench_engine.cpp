@@ -35,7 +35,21 @@ Json bench(const std::string& engine) {
   return Json::parse(r.output);
 }
 
+// The loop phase: the same number of steps through Simulation::run from where the adapter
+// phase stopped; its overhead over the engine's own stepping is a finite figure.
+void expect_loop_phase(const Json& j) {
+  const Json& l = j.at("loop");
+  ASSERT_FALSE(l.contains("error")) << l.dump();
+  EXPECT_EQ(l.at("steps"), 20);
+  EXPECT_GT(l.at("engine_ms_per_step").get<double>(), 0);
+  EXPECT_GE(l.at("loop_ms_per_step").get<double>(), 0);
+  EXPECT_GT(l.at("adapter_after_ms_per_step").get<double>(), 0);
+  EXPECT_GE(l.at("loop_overhead_vs_engine_in_loop").get<double>(), 0);
+  EXPECT_TRUE(std::isfinite(l.at("loop_overhead_vs_adapter").get<double>()));
+}
+
 void expect_raw_comparison(const Json& j) {
+  expect_loop_phase(j);
   const double a = j.at("adapter").at("ms_per_step"), raw = j.at("raw").at("ms_per_step");
   EXPECT_GT(a, 0);
   EXPECT_GT(raw, 0);
@@ -61,6 +75,7 @@ TEST(BenchEngine, LsdemHasNoRawLibrary) {
   const Json j = bench("lsdem");
   EXPECT_GT(j.at("adapter").at("ms_per_step").get<double>(), 0);
   EXPECT_TRUE(j.at("raw").is_null());
+  expect_loop_phase(j);
 }
 
 TEST(BenchEngine, BadInputIsExit2) {

@@ -409,3 +409,55 @@ TEST(SimulationLoop, SkipRuleAnalysesAgainOnlyWhenTheLoadGrew) {
   EXPECT_EQ(on.sum.analyses, 3 * static_cast<long>(expect.size()));
   EXPECT_EQ(on.sum.analyses + on.sum.analyses_skipped, off.sum.analyses);  // every screened-in check is one or the other
 }
+
+namespace {
+// The squeeze engine whose platen read-out (called by the loop every step, outside
+// Engine::step) takes `delay` seconds, and whose steps take `step_delay`.
+class SlowReadoutEngine : public SqueezeEngine {
+ public:
+  SlowReadoutEngine(double delay, double step_delay) : delay_(delay), step_delay_(step_delay) {}
+  void step(double dt) override {
+    SqueezeEngine::step(dt);
+    std::this_thread::sleep_for(std::chrono::duration<double>(step_delay_));
+  }
+  double platen_force() const override {
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay_));
+    return SqueezeEngine::platen_force();
+  }
+  double delay_, step_delay_;
+};
+}  // namespace
+
+// summary.json time_breakdown_s.loop: what the loop spends outside the parts it times
+// (engine, guards, checks, output) — the loop overhead `crumble bench engine` reports. Work
+// done between engine steps lands there, the engine's own stepping does not.
+TEST(SimulationLoop, LoopOverheadIsTimedApartFromTheEngine) {
+  const auto run = [](double readout_delay, double step_delay) {
+    EngineContext ctx;
+    SimulationSettings ss;
+    ss.time_steps = {{1e300, 1e-4}};
+    ss.sample_every = 0;
+    ss.max_steps = 40;
+    ss.guards.enabled = false;
+    LoadingSettings ls;
+    ls.mode = "none";
+    ScheduleSettings sch;
+    ScreeningSettings scr;
+    Simulation sim(std::make_unique<SlowReadoutEngine>(readout_delay, step_delay), std::make_unique<ThresholdModel>(),
+                   std::make_unique<EighthBuilder>(), ctx, ss, ls, sch, scr, 1);
+    sim.set_container({0.01, 0.01, 0.01, 0});
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    sim.add_grain(g);
+    return sim.run();
+  };
+  // 40 steps, each reading the platen force at least once: >= 40 ms of read-out in `loop`.
+  const RunSummary slow_loop = run(1e-3, 0);
+  EXPECT_EQ(slow_loop.steps, 40);
+  EXPECT_GE(slow_loop.timings.loop, 40 * 1e-3);
+  EXPECT_LT(slow_loop.timings.engine, 0.5 * slow_loop.timings.loop);
+  // Slow steps, instant read-out: the other way round.
+  const RunSummary slow_engine = run(0, 1e-3);
+  EXPECT_GE(slow_engine.timings.engine, 40 * 1e-3);
+  EXPECT_LT(slow_engine.timings.loop, 0.5 * slow_engine.timings.engine);
+}
