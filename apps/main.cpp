@@ -317,14 +317,17 @@ int main(int argc, char** argv) {
               "with matplotlib, or the plotting script failed.");
 
   std::string stages_dir;
-  double stages_to = 30;
+  double stages_to = std::nan("");  // the table's default: 30 MPa or 15 % strain
   bool stages_json = false;
-  auto* stg = app.add_subcommand("stages", "where a run's wall time went per MPa, and its extrapolation to a higher stress");
+  auto* stg = app.add_subcommand("stages", "where a run's wall time went per MPa (or % strain), and its extrapolation further");
   stg->add_option("dir", stages_dir, "output folder of crumble run (it holds stages.csv)")->required();
-  stg->add_option("--to", stages_to, "extrapolate the wall time to this vertical stress, MPa (default 30: Zhu & Zhao 2019 §5)")
+  stg->add_option("--to", stages_to,
+                  "extrapolate the wall time to this level, in the table's unit: vertical stress in MPa (default 30: "
+                  "Zhu & Zhao 2019 §5) or, for a strain-controlled run, axial strain in % (default 15: Harmon et al. 2020 §5)")
       ->check(CLI::Range(0.0, 1e6));
   stg->add_flag("--json", stages_json, "print JSON instead of Markdown");
-  stg->footer("Reads DIR/stages.csv (one row per MPa of vertical stress: wall time, grains, analyses, breaking analyses, "
+  stg->footer("Reads DIR/stages.csv (one row per MPa of vertical stress, or per % of axial strain for loading.mode "
+              "strain_rate: wall time, grains, analyses, breaking analyses, "
               "mean analysis time, engine time per step), fits the wall time per MPa against the grain count and the "
               "grain count against the stress (power laws over the stages with breakage), and extrapolates. "
               "docs/performance.md shows it on the Zhu & Zhao run.");
@@ -366,7 +369,7 @@ int main(int argc, char** argv) {
     if (*plt) return cmd_plot(plot_dir);
     if (*stg) {
       std::string md;
-      const auto j = stage_report(stages_dir, stages_to * 1e6, &md);
+      const auto j = stage_report(stages_dir, stages_to, &md);
       std::cout << (stages_json ? j.dump(2) + "\n" : md);
       return 0;
     }

@@ -14,10 +14,23 @@ namespace crumble {
 namespace fs = std::filesystem;
 
 namespace {
-const char* kHeader =
-    "stress_from_MPa,stress_to_MPa,complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,engine_s,"
+const char* kColumns =
+    ",complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,engine_s,"
     "engine_ms_per_step,analyses,breaking_analyses,analysis_s,mean_analysis_ms,breaking_share_of_analysis_time,"
     "fragments_s,analyses_total,breakage_events_total";
+
+// The first two columns: the stage's bounds in the table's unit.
+struct AxisNames {
+  const char *from, *to, *unit, *key;  // column names, unit in text, JSON key suffix
+};
+AxisNames axis_names(StagesWriter::Axis a) {
+  return a == StagesWriter::Axis::Strain ? AxisNames{"strain_from_percent", "strain_to_percent", "% strain", "percent"}
+                                         : AxisNames{"stress_from_MPa", "stress_to_MPa", "MPa", "MPa"};
+}
+std::string header(StagesWriter::Axis a) {
+  const AxisNames n = axis_names(a);
+  return std::string(n.from) + "," + n.to + kColumns;
+}
 
 double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
@@ -25,7 +38,7 @@ double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::ste
 
 // The last kept row of a resumed run's table: where the next stage starts and the counters.
 template <class R>
-long read_resume(const std::string& path, long resume_step, R* out) {
+long read_resume(const std::string& path, StagesWriter::Axis axis, long resume_step, R* out) {
   if (resume_step < 0) return resume_step;
   const std::string file = fs::exists(path + ".part") ? path + ".part" : path;
   if (!fs::exists(file)) return resume_step;
@@ -36,7 +49,7 @@ long read_resume(const std::string& path, long resume_step, R* out) {
       if (rows[0][c] == name) return static_cast<int>(c);
     return -1;
   };
-  const int c_step = col("step"), c_to = col("stress_to_MPa"), c_wall = col("wall_total_s"), c_g = col("grains"),
+  const int c_step = col("step"), c_to = col(axis_names(axis).to), c_wall = col("wall_total_s"), c_g = col("grains"),
             c_a = col("analyses_total"), c_e = col("breakage_events_total");
   const int last = std::max({c_step, c_to, c_wall, c_g, c_a, c_e});
   if (std::min({c_step, c_to, c_wall, c_g, c_a, c_e}) < 0) return resume_step;
@@ -44,7 +57,7 @@ long read_resume(const std::string& path, long resume_step, R* out) {
     const auto& r = rows[i];
     if (static_cast<int>(r.size()) <= last || std::atol(r[c_step].c_str()) > resume_step) continue;
     out->found = true;
-    out->from = std::atof(r[c_to].c_str()) * 1e6;
+    out->from = std::atof(r[c_to].c_str());
     out->wall_total = std::atof(r[c_wall].c_str());
     out->step = std::atol(r[c_step].c_str());
     out->grains = static_cast<std::size_t>(std::atol(r[c_g].c_str()));
@@ -55,11 +68,11 @@ long read_resume(const std::string& path, long resume_step, R* out) {
 }
 }  // namespace
 
-StagesWriter::StagesWriter(const std::string& dir, double width, long resume_step)
-    : width_(width),
+StagesWriter::StagesWriter(const std::string& dir, Axis axis, long resume_step)
+    : axis_(axis),
       resumed_(resume_step >= 0),
       resume_step_(resume_step),
-      csv_(dir + "/stages.csv", kHeader, read_resume(dir + "/stages.csv", resume_step, &resume_)) {}
+      csv_(dir + "/stages.csv", header(axis), read_resume(dir + "/stages.csv", axis, resume_step, &resume_)) {}
 
 StagesWriter::Mark StagesWriter::mark(const Simulation& sim, const RunState& s) const {
   const Timings& t = sim.timings();
@@ -92,7 +105,7 @@ void StagesWriter::on_start(const Simulation& sim, const RunState& s) {
       start_.analyses_total = start_.events_total = 0;
     }
   }
-  stage_ = static_cast<long>(std::floor(from_ / width_ + 1e-9));
+  stage_ = static_cast<long>(std::floor(from_ + 1e-9));
 }
 
 void StagesWriter::on_analysis(const Simulation&, const AnalysisRecord& r) {
@@ -109,7 +122,7 @@ void StagesWriter::write_row(const Simulation& sim, const RunState& s, double to
   const long steps = now.step - start_.step, analyses = now.analyses_total - start_.analyses_total;
   const double engine = now.engine - start_.engine;
   auto& o = csv_.row();
-  o << from_ / 1e6 << ',' << to / 1e6 << ',' << (complete ? 1 : 0) << ',' << (stage_resumed_ ? 1 : 0) << ',' << s.step
+  o << from_ << ',' << to << ',' << (complete ? 1 : 0) << ',' << (stage_resumed_ ? 1 : 0) << ',' << s.step
     << ',' << s.time << ',' << start_.grains << ',' << s.grains << ',' << wall << ',' << wall_total_ << ',' << steps << ','
     << engine << ',';
   if (steps > 0) o << 1e3 * engine / steps;
@@ -127,14 +140,16 @@ void StagesWriter::write_row(const Simulation& sim, const RunState& s, double to
 
 void StagesWriter::on_sample(const Simulation& sim, const RunState& s) {
   // A stress ramp by the stress it commands (its measured stress rings), else the largest
-  // measured stress so far: a stage is never entered twice.
-  const double level = s.target_stress > 0 ? s.target_stress : s.platen_stress;
+  // measured stress so far; strain stages by the largest axial strain so far: a stage is
+  // never entered twice.
+  const double level = axis_ == Axis::Strain ? 100 * s.axial_strain
+                                             : 1e-6 * (s.target_stress > 0 ? s.target_stress : s.platen_stress);
   if (std::isfinite(level)) level_ = std::max(level_, level);
-  const long stage = static_cast<long>(std::floor(level_ / width_ + 1e-9));
+  const long stage = static_cast<long>(std::floor(level_ + 1e-9));
   if (stage <= stage_) return;
-  write_row(sim, s, static_cast<double>(stage) * width_, true);
+  write_row(sim, s, static_cast<double>(stage), true);
   stage_ = stage;
-  from_ = static_cast<double>(stage) * width_;
+  from_ = static_cast<double>(stage);
 }
 
 void StagesWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
@@ -176,7 +191,11 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
       if (rows[0][c] == name) return c;
     throw InputError(path + ", line 1: no column '" + std::string(name) + "'");
   };
-  const std::size_t c_from = col("stress_from_MPa"), c_to = col("stress_to_MPa"), c_complete = col("complete"),
+  const bool strain = !rows[0].empty() && rows[0][0] == axis_names(StagesWriter::Axis::Strain).from;
+  const AxisNames ax = axis_names(strain ? StagesWriter::Axis::Strain : StagesWriter::Axis::Stress);
+  const std::string unit = ax.unit, key = ax.key;
+  if (!std::isfinite(target)) target = strain ? 15 : 30;
+  const std::size_t c_from = col(ax.from), c_to = col(ax.to), c_complete = col("complete"),
                     c_resumed = col("resumed"), c_g0 = col("grains_start"), c_g = col("grains"), c_wall = col("wall_s"),
                     c_total = col("wall_total_s"), c_eng = col("engine_ms_per_step"), c_an = col("analyses"),
                     c_br = col("breaking_analyses"), c_mean = col("mean_analysis_ms"),
@@ -209,11 +228,12 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
   nlohmann::json j;
   j["stages"] = nlohmann::json::array();
   for (const auto& s : st)
-    j["stages"].push_back({{"from_MPa", s.from}, {"to_MPa", s.to}, {"complete", s.complete}, {"resumed", s.resumed},
+    j["stages"].push_back({{"from_" + key, s.from}, {"to_" + key, s.to}, {"complete", s.complete}, {"resumed", s.resumed},
                            {"grains", s.grains}, {"wall_s", s.wall}, {"analyses", s.analyses},
                            {"breaking_analyses", s.breaking}});
   const double measured_to = st.back().to, measured_wall = st.back().wall_total;
-  j["measured_to_MPa"] = measured_to;
+  j["axis"] = strain ? "axial strain" : "vertical stress";
+  j["measured_to_" + key] = measured_to;
   j["unfinished"] = unfinished;
   j["measured_wall_s"] = measured_wall;
 
@@ -227,14 +247,14 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
     // quarter of a stage (noise) nor those that lost wall time to a kill.
     if (breaking && !s.resumed && s.to - s.from >= 0.25) fit.push_back(&s);
   }
-  // Cost per MPa against the mean grain count of the stage.
+  // Cost per stage unit (MPa or %) against the mean grain count of the stage.
   std::vector<double> n, cost;
   for (const auto* s : fit) {
     n.push_back(0.5 * static_cast<double>(s->grains_start + s->grains));
     cost.push_back(s->wall / (s->to - s->from));
   }
   const PowerLaw cf = fit_power_law(n, cost);
-  // Grain count against the stress, over the later half of those stages (at least three).
+  // Grain count against the level, over the later half of those stages (at least three).
   std::vector<double> sig, ng;
   const std::size_t first = fit.size() > 6 ? fit.size() / 2 : 0;
   for (std::size_t k = first; k < fit.size(); ++k) {
@@ -244,17 +264,23 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
   const PowerLaw gf = fit_power_law(sig, ng);
   const bool can = std::isfinite(cf.exponent) && std::isfinite(gf.exponent) && cf.points >= 3 && gf.points >= 3;
   if (can) {
-    j["cost_fit"] = {{"law", "wall s per MPa = a · N^b"}, {"a", cf.coefficient}, {"b", cf.exponent}, {"stages", cf.points}};
-    j["grains_fit"] = {{"law", "N = c · (σ/MPa)^k"}, {"c", gf.coefficient}, {"k", gf.exponent}, {"stages", gf.points}};
+    j["cost_fit"] = {{"law", strain ? "wall s per % strain = a · N^b" : "wall s per MPa = a · N^b"},
+                     {"a", cf.coefficient},
+                     {"b", cf.exponent},
+                     {"stages", cf.points}};
+    j["grains_fit"] = {{"law", strain ? "N = c · (ε/%)^k" : "N = c · (σ/MPa)^k"},
+                       {"c", gf.coefficient},
+                       {"k", gf.exponent},
+                       {"stages", gf.points}};
   }
-  j["target_MPa"] = target / 1e6;
+  j["target_" + key] = target;
   double predicted = measured_wall, n_end = static_cast<double>(st.back().grains);
-  if (can && target / 1e6 > measured_to) {
+  if (can && target > measured_to) {
     // Continue the grain count from the last measured one with the fitted growth.
     const double scale = n_end / gf(measured_to);
     double s0 = measured_to;
-    while (s0 < target / 1e6 - 1e-9) {
-      const double s1 = std::min(target / 1e6, std::floor(s0 + 1 + 1e-9));
+    while (s0 < target - 1e-9) {
+      const double s1 = std::min(target, std::floor(s0 + 1 + 1e-9));
       const double n1 = scale * gf(s1);
       predicted += cf(0.5 * (n_end + n1)) * (s1 - s0);
       n_end = n1;
@@ -269,21 +295,21 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
 
   if (markdown) {
     std::ostringstream md;
-    md << "| MPa | grains | wall s | analyses | breaking | mean analysis ms | breaking share of analysis time | engine ms/step |\n"
+    md << "| " << unit << " | grains | wall s | analyses | breaking | mean analysis ms | breaking share of analysis time | engine ms/step |\n"
           "|---|---|---|---|---|---|---|---|\n";
     for (const auto& s : st)
       md << "| " << fmt(s.from) << "–" << fmt(s.to) << (s.complete ? "" : " (partial)") << (s.resumed ? " (resumed)" : "")
          << " | " << s.grains << " | " << fmt(s.wall) << " | " << s.analyses << " | " << s.breaking << " | "
          << fmt(s.mean_ms) << " | " << (std::isfinite(s.share) ? fmt(100 * s.share, 2) + " %" : "—") << " | "
          << fmt(s.engine_ms) << " |\n";
-    md << "\nMeasured: " << fmt(measured_to) << " MPa in " << fmt(measured_wall, 4) << " s of wall"
+    md << "\nMeasured: " << fmt(measured_to) << " " << unit << " in " << fmt(measured_wall, 4) << " s of wall"
        << (unfinished ? " (from stages.csv.part: the run is still going, or was killed)" : "") << ".\n";
     if (can) {
-      md << "Cost per MPa = " << fmt(cf.coefficient) << " s · N^" << fmt(cf.exponent) << " (" << cf.points
-         << " stages); grains N = " << fmt(gf.coefficient) << " · (σ/MPa)^" << fmt(gf.exponent) << " (" << gf.points
-         << " stages).\n";
-      if (target / 1e6 > measured_to)
-        md << "Extrapolated to " << fmt(target / 1e6) << " MPa: " << fmt(n_end, 4) << " grains, " << fmt(predicted, 4)
+      md << "Cost per " << (strain ? "% strain" : "MPa") << " = " << fmt(cf.coefficient) << " s · N^"
+         << fmt(cf.exponent) << " (" << cf.points << " stages); grains N = " << fmt(gf.coefficient)
+         << (strain ? " · (ε/%)^" : " · (σ/MPa)^") << fmt(gf.exponent) << " (" << gf.points << " stages).\n";
+      if (target > measured_to)
+        md << "Extrapolated to " << fmt(target) << " " << unit << ": " << fmt(n_end, 4) << " grains, " << fmt(predicted, 4)
            << " s = " << fmt(predicted / 3600, 3) << " h of wall in all.\n";
     } else {
       md << "Too few complete stages with breakage to fit (need 3): run further.\n";

@@ -1,10 +1,12 @@
 // Where the time of a long run goes, stage by stage (issue: the full Zhu & Zhao run to
 // 30 MPa). `stages.csv` gets one row per MPa of vertical stress (the commanded stress of a
-// stress ramp, else the largest measured platen stress so far): the wall time of the stage,
-// the grains at its end, the analyses and the breaking analyses in it, the mean analysis
-// time and the engine time per step. `crumble stages DIR` reads it back, fits the cost per
-// MPa against the grain count and the grain count against the stress (power laws, core/
-// Analysis.h fit_power_law) and extrapolates the wall time to a target stress.
+// stress ramp, else the largest measured platen stress so far) or, for a strain-controlled
+// run (loading.mode strain_rate: Harmon et al. 2020 §5, whose stress is a sawtooth), one row
+// per percent of axial strain: the wall time of the stage, the grains at its end, the
+// analyses and the breaking analyses in it, the mean analysis time and the engine time per
+// step. `crumble stages DIR` reads it back, fits the cost per stage against the grain count
+// and the grain count against the level (power laws, core/Analysis.h fit_power_law) and
+// extrapolates the wall time to a target level.
 #pragma once
 #include <chrono>
 #include <string>
@@ -17,10 +19,12 @@ namespace crumble {
 
 class StagesWriter : public Observer {
  public:
-  // width: the stage width in Pa (1 MPa). resume_step >= 0: continue the table of a run
-  // resumed at that step (the rows up to it are kept; a stage in progress at a kill loses
-  // the wall time spent on it since the last checkpoint and says so: resumed = 1).
-  StagesWriter(const std::string& dir, double width = 1e6, long resume_step = -1);
+  // What a stage is one unit of: MPa of vertical stress, or percent of axial strain.
+  enum class Axis { Stress, Strain };
+  // resume_step >= 0: continue the table of a run resumed at that step (the rows up to it
+  // are kept; a stage in progress at a kill loses the wall time spent on it since the last
+  // checkpoint and says so: resumed = 1).
+  StagesWriter(const std::string& dir, Axis axis = Axis::Stress, long resume_step = -1);
   void on_start(const Simulation&, const RunState& s) override;
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
@@ -39,7 +43,7 @@ class StagesWriter : public Observer {
   Mark mark(const Simulation& sim, const RunState& s) const;
   void write_row(const Simulation& sim, const RunState& s, double to, bool complete);
 
-  double width_;
+  Axis axis_;
   // From the last kept row of a resumed run.
   struct Resume {
     bool found = false;
@@ -50,9 +54,9 @@ class StagesWriter : public Observer {
   bool resumed_ = false;
   long resume_step_ = -1;
   CsvStream csv_;
-  long stage_ = -1;     // index of the stage in progress (its stress_from = stage_ · width)
-  double from_ = 0;     // Pa: where the stage in progress began
-  double level_ = 0;    // Pa: the loading level so far
+  long stage_ = -1;     // index of the stage in progress (its level_from = stage_)
+  double from_ = 0;     // MPa or %: where the stage in progress began
+  double level_ = 0;    // MPa or %: the loading level so far
   double wall_total_ = 0;
   bool stage_resumed_ = false;
   Mark start_;
@@ -60,9 +64,10 @@ class StagesWriter : public Observer {
   long analyses_seen_ = 0;                    // analyses this process saw in the stage
 };
 
-// The table of DIR/stages.csv with the fits and the extrapolation to `target` Pa, as JSON;
-// `markdown` gets the same as a Markdown table and text. Throws InputError when the file is
-// missing or malformed (naming the file, line and column).
+// The table of DIR/stages.csv with the fits and the extrapolation to `target` in the table's
+// unit (MPa or percent of strain; NaN: 30 MPa, Zhu & Zhao 2019 §5, or 15 %, Harmon et al. 2020
+// §5), as JSON; `markdown` gets the same as a Markdown table and text. Throws InputError when
+// the file is missing or malformed (naming the file, line and column).
 nlohmann::json stage_report(const std::string& dir, double target, std::string* markdown = nullptr);
 
 }  // namespace crumble

@@ -244,7 +244,9 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
         out, VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts, sc.packing.container.height},
         resumed ? st.step : -1));
   if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1));
-  sim.add_observer(std::make_shared<StagesWriter>(out, 1e6, resumed ? st.step : -1L));
+  sim.add_observer(std::make_shared<StagesWriter>(
+      out, sim.loading().settings().mode == "strain_rate" ? StagesWriter::Axis::Strain : StagesWriter::Axis::Stress,
+      resumed ? st.step : -1L));
   sim.add_observer(std::make_shared<CompressionRecorder>(out));
   {
     // Fines: finer than the crushing limit (screening.min_diameter, Zhu & Zhao 2019 §5: grains

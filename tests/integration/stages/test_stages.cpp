@@ -24,13 +24,13 @@ namespace {
 double grains(double s) { return 720 * std::pow(s, 1.2); }
 double cost(double n) { return 0.002 * std::pow(n, 1.5); }
 
-fs::path write_table(const std::string& name, int stages, bool partial) {
+fs::path write_table(const std::string& name, int stages, bool partial, bool strain = false) {
   const fs::path dir = fs::temp_directory_path() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream o(dir / "stages.csv");
-  o << std::setprecision(17)
-    << "stress_from_MPa,stress_to_MPa,complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,"
+  o << std::setprecision(17) << (strain ? "strain_from_percent,strain_to_percent" : "stress_from_MPa,stress_to_MPa")
+    << ",complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,"
        "engine_s,engine_ms_per_step,analyses,breaking_analyses,analysis_s,mean_analysis_ms,"
        "breaking_share_of_analysis_time,fragments_s,analyses_total,breakage_events_total\n";
   double total = 0, n0 = 720;
@@ -56,7 +56,7 @@ TEST(Stages, FitsAndExtrapolatesAPowerLawRun) {
   // Grain counts are written as integers, so the fits recover the laws to rounding (< 0.1 %).
   const fs::path dir = write_table("crumble_stages_fit", 12, true);
   std::string md;
-  const auto j = crumble::stage_report(dir.string(), 30e6, &md);
+  const auto j = crumble::stage_report(dir.string(), 30, &md);
   ASSERT_TRUE(j.contains("cost_fit")) << j.dump(2);
   EXPECT_NEAR(j["cost_fit"]["b"].get<double>(), 1.5, 2e-3);
   EXPECT_NEAR(j["grains_fit"]["k"].get<double>(), 1.2, 2e-3);
@@ -82,7 +82,7 @@ TEST(Stages, FitsAndExtrapolatesAPowerLawRun) {
 
 TEST(Stages, TooFewStagesSayToRunFurther) {
   const fs::path dir = write_table("crumble_stages_short", 3, false);
-  const auto j = crumble::stage_report(dir.string(), 30e6);
+  const auto j = crumble::stage_report(dir.string(), 30);
   EXPECT_FALSE(j.contains("predicted_wall_s"));
   EXPECT_NE(j["note"].get<std::string>().find("run further"), std::string::npos);
 }
@@ -111,4 +111,53 @@ TEST(Stages, CliNamesAMissingOrBrokenFile) {
   r = run_cli("stages " + write_table("crumble_stages_ok", 12, false).string() + " --to 20 --json");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("\"predicted_hours\""), std::string::npos) << r.output;
+}
+
+// A strain-controlled run (loading.mode strain_rate) is staged per percent of axial strain:
+// the same fits, the extrapolation to 15 % by default (Harmon et al. 2020 §5).
+TEST(Stages, StrainTablesAreReadPerPercent) {
+  const fs::path dir = write_table("crumble_stages_strain", 8, false, true);
+  std::string md;
+  const auto j = crumble::stage_report(dir.string(), std::nan(""), &md);
+  EXPECT_EQ(j.at("axis"), "axial strain");
+  EXPECT_DOUBLE_EQ(j.at("measured_to_percent").get<double>(), 8);
+  EXPECT_DOUBLE_EQ(j.at("target_percent").get<double>(), 15);
+  EXPECT_NEAR(j.at("cost_fit").at("b").get<double>(), 1.5, 2e-3);
+  EXPECT_GT(j.at("predicted_wall_s").get<double>(), j.at("measured_wall_s").get<double>());
+  EXPECT_NE(md.find("| % strain | grains |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Extrapolated to 15 % strain"), std::string::npos) << md;
+  EXPECT_DOUBLE_EQ(crumble::stage_report(write_table("crumble_stages_stress_default", 12, false).string(), std::nan(""))
+                       .at("target_MPa")
+                       .get<double>(),
+                   30);
+}
+
+// A run under loading.mode strain_rate writes its stages per percent of axial strain, one row
+// each, in order; a stress ramp per MPa (the header says which).
+TEST(Stages, AStrainRateRunIsStagedByStrain) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_stages_strain_run";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // One sphere under a platen moving at a strain rate of 10 /s for 3.5 % (lsdem, no breakage).
+  std::ofstream(dir / "s.json") << R"({
+  "name": "stages_strain", "engine": {"type": "lsdem"}, "breakage": {"type": "none"},
+  "container": {"lx": 0.01, "ly": 0.01, "height": 0.004},
+  "packing": {"type": "grains", "grains": [
+     {"shape": {"type": "sphere", "radius": 0.001}, "position": [0.005, 0.005, 0.0011]}]},
+  "loading": {"mode": "strain_rate", "strain_rate": 10.0, "stop_strain": 0.035},
+  "time_step": 1e-5, "simulation": {"sample_every": 10}, "output": {"plots": false}
+})";
+  const auto r = run_cli("run " + (dir / "s.json").string() + " --out " + (dir / "out").string() + " --quiet");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto rows = crumble::read_csv((dir / "out" / "stages.csv").string());
+  ASSERT_GE(rows.size(), 4u);
+  EXPECT_EQ(rows[0][0], "strain_from_percent");
+  EXPECT_EQ(rows[0][1], "strain_to_percent");
+  for (std::size_t i = 1; i <= 3; ++i) {
+    EXPECT_EQ(std::stod(rows[i][0]), static_cast<double>(i - 1));
+    EXPECT_EQ(std::stod(rows[i][1]), static_cast<double>(i));
+  }
+  const auto s = run_cli("stages " + (dir / "out").string());
+  EXPECT_EQ(s.status, 0) << s.output;
+  EXPECT_NE(s.output.find("% strain"), std::string::npos) << s.output;
 }
