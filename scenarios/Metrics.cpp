@@ -168,7 +168,7 @@ RunOutputs read_run_outputs(const std::string& dir) {
   }
   const fs::path ev = fs::path(dir) / "events.csv";
   std::error_code ec;
-  if (fs::exists(ev, ec)) r.events = read_csv(ev.string());
+  if (fs::exists(ev, ec)) r.events = read_breakage_rows(ev.string());
   return r;
 }
 

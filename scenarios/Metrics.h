@@ -11,8 +11,9 @@
 
 namespace crumble {
 
-// What a metric reads: a run folder's summary.json and events.csv (rows, header first; empty
-// when the file is missing).
+// What a metric reads: a run folder's summary.json and the breakage rows of its events.csv
+// (header first; empty when the file is missing; read_breakage_rows: the intact analyses are
+// skipped).
 struct RunOutputs {
   nlohmann::json summary;
   std::vector<std::vector<std::string>> events;

@@ -306,6 +306,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
     if (!(sc.output.psd_at_strain[i] > 0 && sc.output.psd_at_strain[i] < 1))
       oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
   sc.output.shape_metrics = oc.boolean("shape_metrics", true);
+  sc.output.intact_analyses = oc.boolean("intact_analyses", true);
   {
     const Options vo(oc, vtk_output_options());
     sc.output.vtk_every = vo.integer("vtk_every");

@@ -19,6 +19,7 @@ struct OutputSettings {
   std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
   std::vector<double> psd_at_strain;     // axial strains: PSD tables written when the strain first passes these
   bool shape_metrics = true;             // shape.csv (means of the grains' shape descriptors per sample)
+  bool intact_analyses = true;           // events.csv rows for analyses that left their grain whole
   long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
   bool vtk_final = true;                 // write the final state as VTK
   bool vtk_contacts = false;             // contact-force lines in each VTK snapshot

@@ -231,7 +231,8 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
   const bool resumed = sim.resumed();
   const SimulationState st = sim.saved_state();
   sim.add_observer(std::make_shared<SeriesWriter>(out, resumed ? st.step : -1));
-  sim.add_observer(std::make_shared<EventsWriter>(out, sim.model().figure_names(), resumed ? st.step : -1L));
+  sim.add_observer(std::make_shared<EventsWriter>(out, sim.model().figure_names(), resumed ? st.step : -1L,
+                                                  sc.output.intact_analyses));
   // The strain at the checkpoint, as Simulation::state() computes it.
   const double resume_strain =
       resumed && st.initial_height > 0 ? (st.initial_height - st.platen_position) / st.initial_height : -1.0;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <string_view>
 #include <sstream>
 #include <stdexcept>
 
@@ -47,6 +48,43 @@ std::vector<std::vector<std::string>> read_csv(const std::string& path) {
     if (!line.empty() && line.back() == ',') cells.emplace_back();
     rows.push_back(std::move(cells));
   }
+  return rows;
+}
+
+std::vector<std::vector<std::string>> read_breakage_rows(const std::string& events_csv) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(events_csv);
+  std::string line;
+  auto split = [](const std::string& l) {
+    std::vector<std::string> cells;
+    std::stringstream ss(l);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (!l.empty() && l.back() == ',') cells.emplace_back();
+    return cells;
+  };
+  if (!std::getline(in, line)) return rows;
+  rows.push_back(split(line));
+  // Columns by name, so the layout may grow.
+  std::size_t children = 9, removed = 12;
+  for (std::size_t c = 0; c < rows[0].size(); ++c) {
+    if (rows[0][c] == "children") children = c;
+    if (rows[0][c] == "removed_volume_m3") removed = c;
+  }
+  // The cell of column k, found by counting commas (no allocation for the intact rows).
+  auto cell = [](const std::string& l, std::size_t k) -> std::string_view {
+    std::size_t a = 0;
+    for (std::size_t i = 0; i < k; ++i) {
+      a = l.find(',', a);
+      if (a == std::string::npos) return {};
+      ++a;
+    }
+    const std::size_t b = std::min(l.find(',', a), l.size());
+    return std::string_view(l).substr(a, b - a);
+  };
+  auto positive = [](std::string_view v) { return !v.empty() && std::atof(std::string(v).c_str()) > 0; };
+  while (std::getline(in, line))
+    if (positive(cell(line, children)) || positive(cell(line, removed))) rows.push_back(split(line));
   return rows;
 }
 
@@ -155,10 +193,12 @@ std::string events_header(const std::vector<std::string>& figures) {
 }
 }  // namespace
 
-EventsWriter::EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step)
+EventsWriter::EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step,
+                           bool intact)
     : dir_(dir),
       figures_(std::move(figure_names)),
-      csv_(dir + "/events.csv", events_header(figures_), resume_step) {}
+      csv_(dir + "/events.csv", events_header(figures_), resume_step),
+      intact_(intact) {}
 
 void EventsWriter::write_figures(const BreakageAnalysis& a) {
   // Columns follow the declared names; a figure the model did not set this time is empty.
@@ -190,6 +230,7 @@ void EventsWriter::on_sample(const Simulation&, const RunState&) {
 
 void EventsWriter::on_analysis(const Simulation&, const AnalysisRecord& r) {
   flush_pending();
+  if (!intact_) return;  // a breakage still gets its row (on_breakage)
   pending_ = r;
   has_pending_ = true;
 }
@@ -215,24 +256,18 @@ void EventsWriter::on_breakage(const Simulation&, const BreakageEvent& e) {
 void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) {
   flush_pending();
   csv_.finish();
-  // From the finished events.csv, so a resumed run counts the events before the resume.
-  const auto rows = read_csv(dir_ + "/events.csv");
-  // A breakage row has children or removed fines (every child can be a fine, leaving no
-  // child in the engine); an analysis that did not break the grain has neither. Counting
-  // children alone dropped those events, and the file disagreed with summary.json.
-  // Columns by name, so the layout may grow.
-  std::size_t children_col = 9, removed_col = 12, stress_col = 2;
+  // From the finished events.csv, so a resumed run counts the events before the resume. A
+  // breakage row has children or removed fines (every child can be a fine, leaving no child
+  // in the engine); counting children alone dropped those events, and the file disagreed
+  // with summary.json.
+  const auto rows = read_breakage_rows(dir_ + "/events.csv");
+  std::size_t stress_col = 2;
   if (!rows.empty())
-    for (std::size_t c = 0; c < rows[0].size(); ++c) {
+    for (std::size_t c = 0; c < rows[0].size(); ++c)
       if (rows[0][c] == "platen_stress_Pa") stress_col = c;
-      if (rows[0][c] == "children") children_col = c;
-      if (rows[0][c] == "removed_volume_m3") removed_col = c;
-    }
   std::vector<double> stresses;
   for (std::size_t i = 1; i < rows.size(); ++i)
-    if (rows[i].size() > std::max(children_col, removed_col) &&
-        (std::atol(rows[i][children_col].c_str()) > 0 || std::atof(rows[i][removed_col].c_str()) > 0))
-      stresses.push_back(std::atof(rows[i][stress_col].c_str()));
+    if (rows[i].size() > stress_col) stresses.push_back(std::atof(rows[i][stress_col].c_str()));
   // Zhu & Zhao 2019 Fig. 12: crushing events per 1 MPa of vertical stress.
   const std::vector<long> per = events_per_increment(stresses, 1e6, s.platen_stress);
   std::ostringstream os;

@@ -62,8 +62,10 @@ double current_k0(const Simulation& sim, const RunState& s);
 // breakage_per_mpa.csv: crushing events per MPa of platen stress.
 class EventsWriter : public Observer {
  public:
-  // resume_step >= 0: continue the rows of a run resumed at that step.
-  EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step = -1);
+  // resume_step >= 0: continue the rows of a run resumed at that step. intact false: only the
+  // analyses that broke their grain get a row (output.intact_analyses).
+  EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step = -1,
+               bool intact = true);
   void on_analysis(const Simulation&, const AnalysisRecord& r) override;
   void on_breakage(const Simulation&, const BreakageEvent& e) override;
   // Every row of a step is on disk before the step's sample (and checkpoint) is written.
@@ -76,6 +78,7 @@ class EventsWriter : public Observer {
   std::string dir_;
   std::vector<std::string> figures_;
   CsvStream csv_;
+  bool intact_ = true;
   bool has_pending_ = false;
   AnalysisRecord pending_;
 };
@@ -139,6 +142,12 @@ class ShapeWriter : public Observer {
 
 // Rows of a CSV file (header first), split at commas; empty when the file is missing.
 std::vector<std::vector<std::string>> read_csv(const std::string& path);
+
+// The header and the breakage rows of an events.csv (a row with children or removed fines;
+// an analysis that left its grain whole has neither), read line by line: a stress-model run
+// writes one row per grain per check, millions of them, which read_csv would hold in memory
+// (6.4 GB for the full Harmon et al. 2020 oedometer). Empty when the file is missing.
+std::vector<std::vector<std::string>> read_breakage_rows(const std::string& events_csv);
 
 nlohmann::json summary_json(const RunSummary& s, const std::string& scenario, const std::string& engine,
                             const std::string& breakage, const std::string& fragments, std::uint64_t seed,

@@ -2,6 +2,7 @@
 // scene (Bullet moves the grain, the average stress breaks it, alpha_shape cuts the plane).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -44,6 +45,15 @@ TEST(StressCli, SingleGrainBreaksAtTheVonMisesStrength) {
   const std::string events = slurp(out / "events.csv");
   EXPECT_NE(events.find("sigma_1_Pa,sigma_2_Pa,sigma_3_Pa,equivalent_stress_Pa,strength_Pa"), std::string::npos)
       << events;
+  // output.intact_analyses false: the same run, events.csv has the breakage row alone while
+  // summary.json still counts every analysis.
+  const auto lines = [](const std::string& t) { return std::count(t.begin(), t.end(), '\n'); };
+  ASSERT_GT(s["analyses"].get<long>(), 1);
+  EXPECT_EQ(lines(events), 1 + s["analyses"].get<long>());
+  const auto r2 = run_cli(args + " --force --set output.intact_analyses=false");
+  ASSERT_EQ(r2.status, 0) << r2.output;
+  EXPECT_EQ(lines(slurp(out / "events.csv")), 2);
+  EXPECT_EQ(Json::parse(slurp(out / "summary.json"))["analyses"], s["analyses"]);
 }
 
 TEST(StressCli, UnknownCriterionIsAConfigError) {

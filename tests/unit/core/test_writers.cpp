@@ -74,6 +74,42 @@ TEST(EventsWriter, BreakagePerMpaCountsEventsWhoseChildrenAllBecameFines) {
     total += std::stol(rows[i][2]);
   }
   EXPECT_EQ(total, 3);
+  // read_breakage_rows (what the metrics use): the header and the three breakage rows, in order.
+  {
+    // An intact analysis row (as written by the loop: its analysis, no breakage after it).
+    std::ofstream o(f.dir / "events.csv", std::ios::app);
+    o << "0,0,1700000,2,0.002,0,0,intact,0,0,,,0,\n";
+  }
+  ASSERT_EQ(read_csv((f.dir / "events.csv").string()).size(), 5u);
+  const auto br = read_breakage_rows((f.dir / "events.csv").string());
+  ASSERT_EQ(br.size(), 4u);
+  EXPECT_EQ(br[0][0], "time_s");
+  EXPECT_EQ(std::stod(br[1][2]), 0.5e6);
+  EXPECT_EQ(std::stod(br[2][2]), 1.5e6);  // no children, only removed fines: still a breakage
+  EXPECT_EQ(std::stod(br[3][2]), 2.2e6);
+  EXPECT_TRUE(read_breakage_rows((f.dir / "nosuch.csv").string()).empty());
+}
+
+// output.intact_analyses false: only the analyses that broke their grain get a row.
+TEST(EventsWriter, IntactAnalysesCanBeLeftOut) {
+  Fixture f("no_intact");
+  EventsWriter w(f.dir.string(), {}, -1, false);
+  AnalysisRecord intact;
+  intact.platen_stress = 1.7e6;
+  intact.analysis.outcome = "intact";
+  w.on_analysis(*f.sc.sim, intact);
+  AnalysisRecord breaking = intact;
+  breaking.analysis.outcome = "split";
+  w.on_analysis(*f.sc.sim, breaking);
+  w.on_breakage(*f.sc.sim, event(2.2e6, 2, 0));
+  w.on_analysis(*f.sc.sim, intact);
+  RunState s;
+  s.platen_stress = 2.5e6;
+  RunSummary sum;
+  w.on_finish(*f.sc.sim, s, sum);
+  const auto rows = read_csv((f.dir / "events.csv").string());
+  ASSERT_EQ(rows.size(), 2u);  // header + the breakage
+  EXPECT_EQ(rows[1][7], "split");
 }
 
 TEST(PsdWriter, LevelNotReachedIsWrittenWithTheFinalState) {
