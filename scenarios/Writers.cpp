@@ -36,18 +36,23 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
 }
 
+namespace {
+// One CSV line split at commas (a trailing comma ends with an empty cell).
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) cells.push_back(cell);
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+}  // namespace
+
 std::vector<std::vector<std::string>> read_csv(const std::string& path) {
   std::vector<std::vector<std::string>> rows;
   std::ifstream in(path);
   std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    std::string cell;
-    while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (!line.empty() && line.back() == ',') cells.emplace_back();
-    rows.push_back(std::move(cells));
-  }
+  while (std::getline(in, line)) rows.push_back(split_csv_line(line));
   return rows;
 }
 
@@ -55,16 +60,8 @@ std::vector<std::vector<std::string>> read_breakage_rows(const std::string& even
   std::vector<std::vector<std::string>> rows;
   std::ifstream in(events_csv);
   std::string line;
-  auto split = [](const std::string& l) {
-    std::vector<std::string> cells;
-    std::stringstream ss(l);
-    std::string cell;
-    while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (!l.empty() && l.back() == ',') cells.emplace_back();
-    return cells;
-  };
   if (!std::getline(in, line)) return rows;
-  rows.push_back(split(line));
+  rows.push_back(split_csv_line(line));
   // Columns by name, so the layout may grow.
   std::size_t children = 9, removed = 12;
   for (std::size_t c = 0; c < rows[0].size(); ++c) {
@@ -84,7 +81,7 @@ std::vector<std::vector<std::string>> read_breakage_rows(const std::string& even
   };
   auto positive = [](std::string_view v) { return !v.empty() && std::atof(std::string(v).c_str()) > 0; };
   while (std::getline(in, line))
-    if (positive(cell(line, children)) || positive(cell(line, removed))) rows.push_back(split(line));
+    if (positive(cell(line, children)) || positive(cell(line, removed))) rows.push_back(split_csv_line(line));
   return rows;
 }
 
