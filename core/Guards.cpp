@@ -101,6 +101,10 @@ GuardReading check_invariants(const GuardSettings& s, const GuardContext& at, co
     const bool out_x = g.position.x < 0 || g.position.x > box.lx;
     const bool out_y = dimension == 3 && (g.position.y < 0 || g.position.y > box.ly);
     if (out_x || out_y || up < 0 || up > platen_height) {
+      if (g.shape->equivalent_diameter() < s.small_grain_fraction * at.reference_diameter) {
+        r.escaped_small.push_back(g.id);
+        continue;
+      }
       std::ostringstream os;
       os << "grain " << g.id << " (d = " << g.shape->equivalent_diameter() << " m) has its centroid at (" << g.position.x
          << ", " << g.position.y;

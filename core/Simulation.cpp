@@ -101,6 +101,7 @@ SimulationState Simulation::saved_state() const {
   s.energy_in = energy_in_;
   s.reference_diameter = reference_diameter_;
   s.small_grain_overlaps = guard_max_.small_grain_overlaps;
+  s.small_grains_removed = guard_max_.small_grains_removed;
   s.guard_max_overlap_fraction = guard_max_.max_overlap_fraction;
   s.guard_max_energy_ratio = guard_max_.energy_ratio;
   if (!resumed_) {
@@ -137,6 +138,7 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   energy_in_ = st.energy_in;
   reference_diameter_ = st.reference_diameter;
   guard_max_.small_grain_overlaps = st.small_grain_overlaps;
+  guard_max_.small_grains_removed = st.small_grains_removed;
   guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
   guard_max_.energy_ratio = st.guard_max_energy_ratio;
   resumed_from_ = st;
@@ -191,6 +193,34 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
               << settings_.guards.max_overlap_fraction << " of its size at step " << step_
               << " (counted in summary.json: guard_small_grain_overlaps)\n";
   guard_max_.small_grain_overlaps += r.small_grain_overlaps;
+  if (!r.escaped_small.empty()) remove_escaped(r.escaped_small);
+}
+
+void Simulation::remove_escaped(const std::vector<GrainId>& ids) {
+  // Guards.h (GuardSettings::containment): tiny grains outside a closed container leave as
+  // fines, their volume kept in the solid volume so the void ratio does not jump.
+  std::vector<char> gone(grains_.size(), 0);
+  for (std::size_t i = 0; i < grains_.size(); ++i) {
+    const Grain& g = grains_[i];
+    if (std::find(ids.begin(), ids.end(), g.id) == ids.end()) continue;
+    if (guard_max_.small_grains_removed == 0)
+      std::cerr << "warning: grain " << g.id << " (d = " << g.shape->equivalent_diameter()
+                << " m, below simulation.guards.small_grain_fraction " << settings_.guards.small_grain_fraction
+                << " of the initial mean diameter) left the container at step " << step_
+                << "; taken out as fines (counted in summary.json: guard_small_grains_removed)\n";
+    engine_->remove_grain(g.id);
+    removed_volume_ += g.shape->volume();
+    removed_mass_ += g.mass(ctx_.materials[g.material].density);
+    ++guard_max_.small_grains_removed;
+    gone[i] = 1;
+  }
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < grains_.size(); ++i) {
+    if (gone[i]) continue;
+    if (k != i) grains_[k] = std::move(grains_[i]);
+    ++k;
+  }
+  grains_.resize(k);
 }
 
 RunState Simulation::state() const {
@@ -333,6 +363,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
+  sum.extra["guard_small_grains_removed"] = static_cast<double>(guard_max_.small_grains_removed);
   auto t0 = Clock::now();
   for (auto& o : observers_) o->on_finish(*this, st, sum);
   timings_.observers += seconds_since(t0);

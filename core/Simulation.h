@@ -55,6 +55,7 @@ struct SimulationState {
   double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
   double reference_diameter = 0;  // m: mean diameter of the initial grains (guards)
   long small_grain_overlaps = 0;
+  long small_grains_removed = 0;  // tiny grains that left the container, taken out as fines
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
 };
 
@@ -169,6 +170,7 @@ class Simulation {
   double energy_in_ = 0;
   double reference_diameter_ = 0;
   GuardReading guard_max_;
+  void remove_escaped(const std::vector<GrainId>& ids);
   std::vector<MovingWall> walls_;
   std::vector<double> wall_radius_;  // bounding radius of each wall's shape
   FeedSettings feed_;

@@ -125,6 +125,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"energy_in", st.energy_in},
                 {"reference_diameter", st.reference_diameter},
                 {"small_grain_overlaps", st.small_grain_overlaps},
+                {"small_grains_removed", st.small_grains_removed},
                 {"grains_initial", st.grains_initial},
                 {"mass_initial", st.mass_initial},
                 {"void_ratio_initial", st.void_ratio_initial},
@@ -200,6 +201,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.energy_in = s.number("energy_in", 0, 0);
   st.reference_diameter = s.number("reference_diameter", 0, 0);
   st.small_grain_overlaps = s.integer("small_grain_overlaps", 0, 0);
+  st.small_grains_removed = s.integer("small_grains_removed", 0, 0);
   st.grains_initial = static_cast<std::size_t>(s.integer("grains_initial", 0, 0));
   st.mass_initial = s.number("mass_initial", 0, 0);
   st.void_ratio_initial = s.number("void_ratio_initial", 0);

@@ -135,3 +135,20 @@ TEST(Guards, ScalarInvariants) {
   EXPECT_EQ(failure_of([&] { check_scalar_invariants(off, ctx(), -1, -1, 10); }), "");
   EXPECT_NE(failure_of([&] { check_scalar_invariants(off, ctx(), std::nan(""), 1, 10); }), "");
 }
+
+TEST(Guards, TinyGrainOutsideTheContainerIsListedForRemovalNotFatal) {
+  // A 0.2 mm grain below the floor, reference diameter 2 mm: 0.1 < small_grain_fraction 0.25.
+  std::vector<Grain> gs{sphere_at(4, {0.005, 0.005, -1e-6}, 0.1e-3), sphere_at(5, {0.005, 0.005, 0.002})};
+  GuardContext at = ctx();
+  at.reference_diameter = 2e-3;
+  GuardReading r;
+  EXPECT_EQ(failure_of([&] { r = check_invariants(GuardSettings{}, at, box(), 3, 0.008, gs, kMat, {}); }), "");
+  ASSERT_EQ(r.escaped_small.size(), 1u);
+  EXPECT_EQ(r.escaped_small[0], 4);
+  // A grain above the limit still stops the run; so does the tiny one without a reference.
+  gs[1].position.z = -1e-4;
+  EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, at, box(), 3, 0.008, gs, kMat, {}); }).find("grain 5"),
+            std::string::npos);
+  gs[1].position.z = 0.002;
+  EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.008, gs, kMat, {}); }), "");
+}

@@ -461,3 +461,37 @@ TEST(SimulationLoop, LoopOverheadIsTimedApartFromTheEngine) {
   EXPECT_GE(slow_engine.timings.engine, 40 * 1e-3);
   EXPECT_LT(slow_engine.timings.loop, 0.5 * slow_engine.timings.engine);
 }
+
+// Guards.h (containment): a grain below small_grain_fraction of the initial mean diameter
+// that has left the container is taken out as fines — mass to mass_removed, counted in the
+// summary — instead of stopping the run; a grain above the limit still stops it.
+TEST(SimulationLoop, TinyGrainOutsideTheContainerLeavesAsFines) {
+  auto run = [](double tiny_radius) {
+    EngineContext ctx;
+    SqueezeSetup u = squeeze_setup();
+    u.ss.guards.containment = true;
+    u.ls.stop_force = 50;
+    Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(), std::make_unique<EighthBuilder>(false, 0),
+                   ctx, u.ss, u.ls, u.sch, u.scr, 123);
+    sim.set_container({0.01, 0.01, 0.01, 0});
+    for (int i = 0; i < 4; ++i) {
+      Grain g;
+      g.shape = Shape::sphere(1e-3);
+      g.position = {2e-3 * (i + 1), 5e-3, 2e-3};
+      sim.add_grain(g);
+    }
+    Grain tiny;
+    tiny.shape = Shape::sphere(tiny_radius);
+    tiny.position = {5e-3, 5e-3, -1e-6};  // 1 µm below the floor
+    const GrainId id = sim.add_grain(tiny);
+    const RunSummary s = sim.run();
+    for (const auto& g : sim.grains()) EXPECT_NE(g.id, id);
+    return s;
+  };
+  const RunSummary s = run(0.05e-3);  // d = 0.1 mm against a mean of 1.6 mm
+  EXPECT_EQ(s.extra.at("guard_small_grains_removed"), 1);
+  const double m_tiny = Material{}.density * (4.0 / 3.0) * M_PI * std::pow(0.05e-3, 3);
+  EXPECT_NEAR(s.mass_removed, m_tiny, 1e-9 * m_tiny);
+  EXPECT_NEAR(s.mass_final + s.mass_removed, s.mass_initial, 1e-9 * s.mass_initial);
+  EXPECT_THROW(run(0.5e-3), PhysicsGuardError);  // d = 1 mm: not tiny, the run stops
+}
