@@ -149,7 +149,16 @@ void check_resumable(const std::string& out, const Json& effective) {
   if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
   std::stringstream ss;
   ss << in.rdbuf();
-  const Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
+  Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
+  // Options added to crumble since that run are absent from its file: fill them with this
+  // build's defaults, as a new run would, so only a real change refuses the resume. (A file
+  // this build no longer accepts is compared as it is, and the difference is named.)
+  try {
+    BuildOptions opt;
+    opt.source_name = (dir / "effective_scenario.json").string();
+    before = build_scenario(before, opt).effective;
+  } catch (const std::exception&) {
+  }
   const std::string d = first_difference(before, effective, "", kResumeMayDiffer);
   if (d.empty()) return;
   auto show = [&](const Json& j) {

@@ -199,6 +199,17 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   expect_input_error("run " + scen + " --out " + b.string() + sets +
                          " --set output.checkpoint_every=50 --set packing.count=41 --resume",
                      "at /packing/count (was 40, now 41)");
+  // A run written before an option existed lacks it in effective_scenario.json: the resume
+  // fills it with its default and goes on, but still refuses a non-default value.
+  {
+    auto e = nlohmann::json::parse(slurp(b / "effective_scenario.json"));
+    ASSERT_TRUE(e["output"].contains("intact_analyses"));
+    e["output"].erase("intact_analyses");
+    std::ofstream(b / "effective_scenario.json") << e.dump(2);
+  }
+  expect_input_error("run " + scen + " --out " + b.string() + sets +
+                         " --set output.checkpoint_every=50 --set output.intact_analyses=false --resume",
+                     "at /output/intact_analyses (was true, now false)");
   const Result r = run("run " + scen + " --out " + b.string() + sets + " --set output.checkpoint_every=50 --resume");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto sa = nlohmann::json::parse(slurp(a / "summary.json"));
