@@ -135,10 +135,12 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 }
 
 // Keys that may differ between a run and its resumption: the thread count (results do not
-// depend on it) and simulation.max_steps (raising it is how a run stopped by it continues).
-// The wall-time checkpoint interval neither changes results nor existed before it was
-// declared, so effective scenarios of earlier runs lack it.
-const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps", "/output/checkpoint_every_s"};
+// depend on it), simulation.max_steps (raising it is how a run stopped by it continues),
+// the wall-time checkpoint interval, and what a physical guard's message advises after a
+// stop: the time step schedule and the guards themselves (they only check the state; a
+// smaller step from the last checkpoint on is how a stopped run goes on).
+const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps", "/output/checkpoint_every_s",
+                                                "/time_step", "/simulation/guards"};
 
 void check_resumable(const std::string& out, const Json& effective) {
   const fs::path dir(out);
@@ -171,8 +173,8 @@ void check_resumable(const std::string& out, const Json& effective) {
   };
   throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
                    ", now " + show(effective) +
-                   "); a resumed run must use the same effective scenario (only /threads and "
-                   "/simulation/max_steps and /output/checkpoint_every_s may change). Use the same file and --set options, or start a new run "
+                   "); a resumed run must use the same effective scenario (only /threads, "
+                   "/simulation/max_steps, /output/checkpoint_every_s, /time_step and /simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 

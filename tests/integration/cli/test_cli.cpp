@@ -172,9 +172,11 @@ TEST(Cli, RigidOedometerRunsOnLsdem) {
   const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
   EXPECT_EQ(s["engine"], "lsdem");
   // A fast ramp on a barely settled packing: the platen reaches the load and overshoots
-  // dynamically, but stays bounded.
+  // dynamically, but stays bounded. The overshoot is a sample of a chaotic settling: 1.5×
+  // and 2.8× on two builds whose force sums differ in order only (bitwise equal for the
+  // first 26 000 settling steps, 1e-16 m apart after 28 000).
   EXPECT_GT(s["max_platen_stress_Pa"].get<double>(), 0.9 * 2e5);
-  EXPECT_LT(s["max_platen_stress_Pa"].get<double>(), 2.0 * 2e5);
+  EXPECT_LT(s["max_platen_stress_Pa"].get<double>(), 4.0 * 2e5);
 }
 
 TEST(Cli, CheckpointAndResumeContinueTheRun) {
@@ -210,6 +212,9 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   expect_input_error("run " + scen + " --out " + b.string() + sets +
                          " --set output.checkpoint_every=50 --set output.intact_analyses=false --resume",
                      "at /output/intact_analyses (was true, now false)");
+  const fs::path c = base / "ck_resumed_smaller_dt";
+  fs::remove_all(c);
+  fs::copy(b, c, fs::copy_options::recursive);
   const Result r = run("run " + scen + " --out " + b.string() + sets + " --set output.checkpoint_every=50 --resume");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto sa = nlohmann::json::parse(slurp(a / "summary.json"));
@@ -228,6 +233,14 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   EXPECT_NE(series.find("\n0.008,100,"), std::string::npos);
   EXPECT_NE(series.find("\n0.02,250,"), std::string::npos);
   EXPECT_EQ(series.find(",100,", series.find(",100,") + 1), std::string::npos);
+  // What a guard's message advises — a smaller time step, other guard limits — may change on
+  // a resume; the run goes on from its checkpoint (at step 125, t = 0.01 s), at 4e-5 s per
+  // step to the end of the 0.02 s ramp: 125 + 250 steps.
+  const Result g = run("run " + scen + " --out " + c.string() + sets +
+                       " --set output.checkpoint_every=50 --set time_step=4e-5"
+                       " --set simulation.guards.max_overlap_fraction=0.6 --resume");
+  ASSERT_EQ(g.status, 0) << g.output;
+  EXPECT_NEAR(nlohmann::json::parse(slurp(c / "summary.json"))["steps"].get<double>(), 375, 2);
   // Resuming a scenario that never wrote a checkpoint is an input error.
   expect_input_error("run " + scen + " --out " + (base / "nothing_here").string() + sets + " --resume",
                      "output.checkpoint_every");
