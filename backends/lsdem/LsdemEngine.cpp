@@ -141,6 +141,8 @@ LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)),
   if (!(s_.damping_ratio >= 0)) throw std::invalid_argument("lsdem: damping_ratio must be >= 0");
   if (!(s_.global_damping >= 0)) throw std::invalid_argument("lsdem: global_damping must be >= 0");
   if (!(s_.dt_safety > 0)) throw std::invalid_argument("lsdem: dt_safety must be > 0");
+  if (!(s_.pair_list_skin >= 0) || !std::isfinite(s_.pair_list_skin))
+    throw std::invalid_argument("lsdem: pair_list_skin must be >= 0");
   if (ctx_.materials.empty()) throw std::invalid_argument("lsdem: no material");
   for (const auto& m : ctx_.materials)
     if (!(m.density > 0) || !(m.friction >= 0) || !(m.wall_friction >= 0) ||
@@ -233,6 +235,7 @@ void LsdemEngine::add_grain(const Grain& g) {
   b.R = b.q.matrix();
   index_[b.id] = bodies_.size();
   bodies_.push_back(b);
+  near_valid_ = false;
 }
 
 void LsdemEngine::remove_grain(GrainId id) {
@@ -245,8 +248,9 @@ void LsdemEngine::remove_grain(GrainId id) {
   for (std::size_t i = 0; i < bodies_.size(); ++i) index_[bodies_[i].id] = i;
   if (--sd->users == 0) shapes_.erase(sd->shape.get());
   // Its pair states go now (a grain added later under the same id starts afresh).
-  for (auto h = history_.begin(); h != history_.end();)
-    h = h->first.first == id || h->first.second == id ? history_.erase(h) : std::next(h);
+  for (auto* m : {&history_, &wall_history_})
+    for (auto h = m->begin(); h != m->end();) h = h->first.first == id || h->first.second == id ? m->erase(h) : std::next(h);
+  near_valid_ = false;  // body indices moved, states went
 }
 
 int LsdemEngine::add_shape_wall(const Shape::Ptr& shape, const Vec3& position, const Quat& orientation) {
@@ -456,99 +460,163 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
 
 }  // namespace
 
+void LsdemEngine::build_near() {
+  // Bounding spheres hashed into a uniform grid of cells of the largest diameter plus the
+  // skin (counting sort); each body's partners sorted, so the list's order — and with it the
+  // order of the force sums — depends on the bodies' order only, not on when it was built.
+  const int dim = ctx_.dimension;
+  const std::size_t nb = bodies_.size();
+  near_.clear();
+  near_x0_.resize(nb);
+  for (std::size_t i = 0; i < nb; ++i) near_x0_[i] = bodies_[i].x;
+  near_valid_ = true;
+  ++near_builds_;
+  if (nb < 2) return;
+  double rmax = 0;
+  Aabb dom;
+  for (const auto& b : bodies_) {
+    rmax = std::max(rmax, b.sd->radius);
+    dom.extend(b.x);
+  }
+  near_skin_ = s_.pair_list_skin * rmax;
+  double cs = 2 * rmax + near_skin_;
+  std::array<long, 3> nc{1, 1, 1};
+  for (;;) {
+    double cells = 1;
+    for (int a = 0; a < dim; ++a) {
+      nc[a] = static_cast<long>(std::floor((dom.hi[a] - dom.lo[a]) / cs)) + 1;
+      cells *= nc[a];
+    }
+    if (cells <= 8.0 * nb + 4096) break;
+    cs *= 1.5;  // grains spread far apart: coarser cells keep the table small
+  }
+  auto coord = [&](const Vec3& x, int a) { return std::min(nc[a] - 1, static_cast<long>((x[a] - dom.lo[a]) / cs)); };
+  const std::size_t ncell = static_cast<std::size_t>(nc[0] * nc[1] * nc[2]);
+  std::vector<std::size_t> cell(nb), start(ncell + 1, 0), sorted(nb);
+  for (std::size_t i = 0; i < nb; ++i) {
+    const Vec3& x = bodies_[i].x;
+    cell[i] = static_cast<std::size_t>(coord(x, 0) + nc[0] * (coord(x, 1) + nc[1] * (dim == 3 ? coord(x, 2) : 0)));
+    ++start[cell[i] + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) start[c + 1] += start[c];
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < nb; ++i) sorted[fill[cell[i]]++] = i;
+  }
+  for (std::size_t i = 0; i < nb; ++i) {
+    const Body& A = bodies_[i];
+    const std::size_t first = near_.size();
+    const long cx = coord(A.x, 0), cy = coord(A.x, 1), cz = dim == 3 ? coord(A.x, 2) : 0;
+    for (long dz = (dim == 3 ? -1 : 0); dz <= (dim == 3 ? 1 : 0); ++dz)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dx = -1; dx <= 1; ++dx) {
+          const long x = cx + dx, y = cy + dy, z = cz + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
+          const std::size_t c = static_cast<std::size_t>(x + nc[0] * (y + nc[1] * z));
+          for (std::size_t k = start[c]; k < start[c + 1]; ++k) {
+            const std::size_t j = sorted[k];
+            if (j <= i) continue;
+            const Body& B = bodies_[j];
+            const double rr = A.sd->radius + B.sd->radius;
+            if (norm2(A.x - B.x) > (rr + near_skin_) * (rr + near_skin_)) continue;
+            // Master: the smaller grain (its nodes are looked up in the other's level set).
+            const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
+            const bool i_master = va < vb || (va == vb && A.id < B.id);
+            NearPair e;
+            e.i = static_cast<int>(i);
+            e.j = static_cast<int>(j);
+            e.a = i_master ? e.i : e.j;
+            e.b = i_master ? e.j : e.i;
+            e.rr = rr;
+            e.key = {bodies_[e.a].id, bodies_[e.b].id};
+            e.st = nullptr;
+            near_.push_back(e);
+          }
+        }
+    std::sort(near_.begin() + static_cast<long>(first), near_.end(),
+              [](const NearPair& a, const NearPair& b) { return a.j < b.j; });
+  }
+  // Pair states that live on (found again by key; the map's nodes never move).
+  if (!history_.empty())
+    for (auto& e : near_) {
+      auto h = history_.find(e.key);
+      if (h != history_.end()) e.st = &h->second;
+    }
+}
+
 void LsdemEngine::compute_forces(double dt) {
   const int dim = ctx_.dimension;
   const std::size_t nb = bodies_.size();
   const std::vector<Wall> W = walls();
 
-  // Broad phase: bounding spheres hashed into a uniform grid of cells of the largest
-  // diameter (counting sort, so the pair order depends on positions and ids only).
+  // Broad phase: the Verlet list (build_near) holds every pair whose bounding spheres can
+  // overlap until two grains have together moved farther than its skin.
+  ++stamp_;
   items_.clear();
-  if (nb > 1) {
-    double rmax = 0;
-    Aabb dom;
-    for (const auto& b : bodies_) {
-      rmax = std::max(rmax, b.sd->radius);
-      dom.extend(b.x);
-    }
-    double cs = 2 * rmax;
-    std::array<long, 3> nc{1, 1, 1};
-    for (;;) {
-      double cells = 1;
-      for (int a = 0; a < dim; ++a) {
-        nc[a] = static_cast<long>(std::floor((dom.hi[a] - dom.lo[a]) / cs)) + 1;
-        cells *= nc[a];
+  if (near_valid_ && nb > 1) {
+    double d1 = 0, d2 = 0;  // the two largest displacements since the build
+    for (std::size_t i = 0; i < nb; ++i) {
+      const double d = norm(bodies_[i].x - near_x0_[i]);
+      if (d > d1) {
+        d2 = d1;
+        d1 = d;
+      } else if (d > d2) {
+        d2 = d;
       }
-      if (cells <= 8.0 * nb + 4096) break;
-      cs *= 1.5;  // grains spread far apart: coarser cells keep the table small
     }
-    auto coord = [&](const Vec3& x, int a) {
-      return std::min(nc[a] - 1, static_cast<long>((x[a] - dom.lo[a]) / cs));
-    };
-    const std::size_t ncell = static_cast<std::size_t>(nc[0] * nc[1] * nc[2]);
-    std::vector<std::size_t> cell(nb), start(ncell + 1, 0), sorted(nb);
-    for (std::size_t i = 0; i < nb; ++i) {
-      const Vec3& x = bodies_[i].x;
-      cell[i] = static_cast<std::size_t>(coord(x, 0) + nc[0] * (coord(x, 1) + nc[1] * (dim == 3 ? coord(x, 2) : 0)));
-      ++start[cell[i] + 1];
-    }
-    for (std::size_t c = 0; c < ncell; ++c) start[c + 1] += start[c];
-    {
-      std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-      for (std::size_t i = 0; i < nb; ++i) sorted[fill[cell[i]]++] = i;
-    }
-    for (std::size_t i = 0; i < nb; ++i) {
-      const Body& A = bodies_[i];
-      const long cx = coord(A.x, 0), cy = coord(A.x, 1), cz = dim == 3 ? coord(A.x, 2) : 0;
-      for (long dz = (dim == 3 ? -1 : 0); dz <= (dim == 3 ? 1 : 0); ++dz)
-        for (long dy = -1; dy <= 1; ++dy)
-          for (long dx = -1; dx <= 1; ++dx) {
-            const long x = cx + dx, y = cy + dy, z = cz + dz;
-            if (x < 0 || y < 0 || z < 0 || x >= nc[0] || y >= nc[1] || z >= nc[2]) continue;
-            const std::size_t c = static_cast<std::size_t>(x + nc[0] * (y + nc[1] * z));
-            for (std::size_t k = start[c]; k < start[c + 1]; ++k) {
-              const std::size_t j = sorted[k];
-              if (j <= i) continue;
-              const Body& B = bodies_[j];
-              const double rr = A.sd->radius + B.sd->radius;
-              if (norm2(A.x - B.x) > rr * rr) continue;
-              // Master: the smaller grain (its nodes are looked up in the other's level set).
-              const double va = A.sd->shape->volume(), vb = B.sd->shape->volume();
-              const bool i_master = va < vb || (va == vb && A.id < B.id);
-              Item it;
-              it.a = static_cast<int>(i_master ? i : j);
-              it.b = static_cast<int>(i_master ? j : i);
-              it.key = {bodies_[it.a].id, bodies_[it.b].id};
-              items_.push_back(std::move(it));
-            }
-          }
-    }
+    if (d1 + d2 >= near_skin_) near_valid_ = false;
   }
+  const bool rebuilt = !near_valid_;
+  if (rebuilt) build_near();
+  for (auto& e : near_) {
+    if (norm2(bodies_[e.i].x - bodies_[e.j].x) > e.rr * e.rr) {
+      // Out of reach this step: its state goes (as it would after any gap of one step).
+      if (e.st) history_.erase(e.key);
+      e.st = nullptr;
+      continue;
+    }
+    Item& it = items_.emplace_back();
+    it.a = e.a;
+    it.b = e.b;
+    it.key = e.key;
+    bool inserted = false;
+    if (!e.st) {
+      auto [h, ins] = history_.try_emplace(e.key);
+      e.st = &h->second;
+      inserted = ins;
+    }
+    it.st = e.st;
+    it.fresh = inserted || e.st->stamp != stamp_ - 1;
+    if (it.fresh) *e.st = PairState{};
+    e.st->stamp = stamp_;
+  }
+  // States of pairs that left the list at its rebuild (not in reach) go.
+  if (rebuilt)
+    for (auto h = history_.begin(); h != history_.end();) h = h->second.stamp != stamp_ ? history_.erase(h) : std::next(h);
+  const std::size_t first_wall_item = items_.size();
   for (std::size_t i = 0; i < nb; ++i)
     for (std::size_t k = 0; k < walls_kin_.size(); ++k) {
       const Body &A = bodies_[i], &B = walls_kin_[k];
       const double rr = A.sd->radius + B.sd->radius;
       if (norm2(A.x - B.x) > rr * rr) continue;
-      Item it;
+      Item& it = items_.emplace_back();
       it.a = static_cast<int>(i);
       it.b = static_cast<int>(k);
       it.shape_wall = true;
       it.key = {A.id, B.id};
-      items_.push_back(std::move(it));
     }
   const std::size_t npairs = items_.size();
   for (std::size_t i = 0; i < nb; ++i)
     for (std::size_t k = 0; k < W.size(); ++k)
       if (dot(bodies_[i].x - W[k].point, W[k].normal) < bodies_[i].sd->radius) {
-        Item it;
+        Item& it = items_.emplace_back();
         it.a = static_cast<int>(i);
         it.b = -1 - static_cast<int>(k);
         it.key = {bodies_[i].id, -1 - W[k].id};
-        items_.push_back(std::move(it));
       }
-  ++stamp_;
-  for (auto& it : items_) {
-    auto [h, fresh] = history_.try_emplace(it.key);
+  for (std::size_t k = first_wall_item; k < items_.size(); ++k) {
+    Item& it = items_[k];
+    auto [h, fresh] = wall_history_.try_emplace(it.key);
     it.st = &h->second;
     it.fresh = fresh || h->second.stamp != stamp_ - 1;
     if (it.fresh) h->second = PairState{};
@@ -759,12 +827,14 @@ void LsdemEngine::compute_forces(double dt) {
     }
     contacts_.push_back(c);
   }
-  // States of pairs that no longer overlap go.
-  for (auto h = history_.begin(); h != history_.end();) h = h->second.stamp != stamp_ ? history_.erase(h) : std::next(h);
+  // States of grain–wall contacts that no longer overlap go.
+  for (auto h = wall_history_.begin(); h != wall_history_.end();)
+    h = h->second.stamp != stamp_ ? wall_history_.erase(h) : std::next(h);
   stats_.node_queries += queries;
   stats_.tree_queries += tree;
   stats_.wall_node_checks += wall_checks;
   stats_.bbox_overlaps += static_cast<long>(npairs);
+  stats_.pair_list_builds = near_builds_;
   stats_.contact_pairs += pairs_in_contact;
   stats_.penetrating_nodes += pen;
   stats_.last_bbox_overlaps = static_cast<long>(npairs);
@@ -835,7 +905,8 @@ bool LsdemEngine::save_state(nlohmann::json& out) const {
     bodies.push_back(J::array({b.id, b.x.x, b.x.y, b.x.z, b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z, b.q.w, b.q.x,
                                b.q.y, b.q.z, b.moved, b.turned}));
   std::vector<const std::pair<const std::pair<GrainId, GrainId>, PairState>*> pairs;
-  for (const auto& h : history_) pairs.push_back(&h);
+  for (const auto* m : {&history_, &wall_history_})
+    for (const auto& h : *m) pairs.push_back(&h);
   std::sort(pairs.begin(), pairs.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
   J ps = J::array();
   for (const auto* p : pairs) {
@@ -962,7 +1033,10 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
   bodies_ = std::move(order);
   index_.clear();
   for (std::size_t i = 0; i < bodies_.size(); ++i) index_[bodies_[i].id] = i;
-  history_ = std::move(hist);
+  history_.clear();
+  wall_history_.clear();
+  for (auto& [k, st] : hist) (k.second < 0 ? wall_history_ : history_).emplace(k, std::move(st));
+  near_valid_ = false;
   stamp_ = stamp;
   friction_scale_ = fs;
   platen_.sync(z, vz);
@@ -988,6 +1062,10 @@ const OptionTable& lsdem_options() {
         opt::number("hertz_reference_overlap", d.hertz_reference_overlap, 1e-9, 0.5, "",
                     "overlap / smallest equivalent radius at which the Hertz stiffness sets the stable step"),
         opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
+        opt::number("pair_list_skin", d.pair_list_skin, 0, 10, "",
+                    "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
+                    "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "
+                    "results, bit for bit: only the speed changes)"),
     };
   }();
   return t;
@@ -1006,6 +1084,7 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
   s.dt_safety = o.number("dt_safety");
   s.hertz_reference_overlap = o.number("hertz_reference_overlap");
   s.mass_scale = o.number("mass_scale");
+  s.pair_list_skin = o.number("pair_list_skin");
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
     o.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");

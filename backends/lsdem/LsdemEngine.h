@@ -32,7 +32,9 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
-// Contact search: bounding spheres hashed into a uniform grid of cells (broad phase); per
+// Contact search: bounding spheres hashed into a uniform grid of cells build a Verlet list
+// of the pairs within a skin (pair_list_skin, 0.2 × the largest bounding radius), rebuilt only when two
+// grains may together have moved farther than the skin (broad phase); per
 // pair, a sphere tree over the master's nodes pruned against the partner's bounding sphere,
 // node box and level set (|∇φ| ≤ √dim for the trilinear interpolant of distance samples);
 // the nodes found within a skin of half a grid cell are kept as candidates, and only they
@@ -69,6 +71,7 @@ struct LsdemSettings {
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
   double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged
+  double pair_list_skin = 0.2;          // Verlet skin / largest bounding radius (0: list rebuilt every step)
   int threads = 1;
 };
 
@@ -81,6 +84,7 @@ struct LsdemStats {
   long bbox_overlaps = 0;    // broad-phase grain pairs whose bounding spheres overlap
   long contact_pairs = 0;    // pairs with at least one penetrating node (summed over steps)
   long penetrating_nodes = 0;
+  long pair_list_builds = 0;  // rebuilds of the broad phase's Verlet list
   double seconds = 0;        // wall time inside step()
   // Last step only.
   long last_bbox_overlaps = 0;
@@ -205,9 +209,28 @@ class LsdemEngine final : public Engine {
   std::vector<Body> walls_kin_;         // shape walls (kinematic)
   std::vector<Vec3> shape_wall_force_;  // force of the grains on each shape wall
   std::unordered_map<GrainId, std::size_t> index_;
-  // Per (master, partner) key; partner < 0: wall −1 − id.
+  // Per (master, partner) key of two grains; states of grain–wall contacts (partner < 0:
+  // wall −1 − id) are kept apart in wall_history_ and swept every step.
   std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> history_;
+  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> wall_history_;
   long stamp_ = 0;
+  // Verlet list of the broad phase: body pairs (i < j, sorted) whose bounding spheres were
+  // within `near_skin_` of each other when it was built, with the pair's live state (or
+  // null). Rebuilt when two bodies may together have moved more than the skin, and after
+  // any change of the bodies; a pair whose spheres overlap now is always in it.
+  struct NearPair {
+    int i, j;  // bodies, i < j
+    int a, b;  // master and partner (the smaller grain is the master)
+    double rr;  // sum of the bounding radii
+    std::pair<GrainId, GrainId> key;
+    PairState* st;
+  };
+  std::vector<NearPair> near_;
+  std::vector<Vec3> near_x0_;
+  double near_skin_ = 0;
+  bool near_valid_ = false;
+  long near_builds_ = 0;
+  void build_near();
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
   PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly
