@@ -77,7 +77,7 @@ TEST(BpmCompression, QuickRunBreaksGrainsKeepsMassAndWritesVoidRatioAndK0) {
   for (std::size_t i = 1; i < events.size(); ++i)
     if (events[i][io] == "split") {
       ++splits;
-      EXPECT_GT(std::stod(events[i][iel]), 12) << i;
+      EXPECT_GE(std::stod(events[i][iel]), 12) << i;  // min_elements 12: a grain of 12 may split
       EXPECT_GE(std::stod(events[i][ip]), 2) << i;
     }
   EXPECT_GT(splits, 0);
