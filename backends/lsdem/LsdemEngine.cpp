@@ -470,7 +470,7 @@ void LsdemEngine::build_near() {
   near_x0_.resize(nb);
   for (std::size_t i = 0; i < nb; ++i) near_x0_[i] = bodies_[i].x;
   near_valid_ = true;
-  ++near_builds_;
+  ++stats_.pair_list_builds;
   if (nb < 2) return;
   double rmax = 0;
   Aabb dom;
@@ -834,7 +834,6 @@ void LsdemEngine::compute_forces(double dt) {
   stats_.tree_queries += tree;
   stats_.wall_node_checks += wall_checks;
   stats_.bbox_overlaps += static_cast<long>(npairs);
-  stats_.pair_list_builds = near_builds_;
   stats_.contact_pairs += pairs_in_contact;
   stats_.penetrating_nodes += pen;
   stats_.last_bbox_overlaps = static_cast<long>(npairs);

@@ -229,7 +229,6 @@ class LsdemEngine final : public Engine {
   std::vector<Vec3> near_x0_;
   double near_skin_ = 0;
   bool near_valid_ = false;
-  long near_builds_ = 0;
   void build_near();
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
