@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The four compression stages of the densely arrayed bonded-particle model (DA-BPM) paper,
-read from a run's series.csv (scenarios/compression_bpm_2d*.json).
+read from a run's series.csv (scenarios/compression_bpm_2d*.json), or its series.csv.part when
+the run is still going or was stopped (a physical guard, a kill): what it reached so far.
 
 The paper divides one-dimensional compression into four stages by the relative void ratio
 e/e0 against the vertical stress (log scale) and the bond failures:
@@ -37,11 +38,15 @@ def main():
                     help="stresses (Pa) at which to report e, e/e0 and K0")
     a = ap.parse_args()
     path = os.path.join(a.out, "series.csv")
+    if not os.path.exists(path) and os.path.exists(path + ".part"):
+        path += ".part"
+        print(f"bpm_stages: {path}: the run did not finish; its stages so far")
     if not os.path.exists(path):
-        sys.exit(f"bpm_stages: {path} not found")
-    rows = list(csv.DictReader(open(path)))
+        sys.exit(f"bpm_stages: {path} not found (nor series.csv.part)")
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
     if len(rows) < 3:
-        sys.exit("bpm_stages: series.csv has fewer than 3 rows")
+        sys.exit(f"bpm_stages: {path} has fewer than 3 rows")
     bins = {}
     for r in rows:
         k = int(float(r["axial_strain"]) / a.bin)

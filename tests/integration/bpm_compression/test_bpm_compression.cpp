@@ -90,5 +90,14 @@ TEST(BpmCompression, QuickRunBreaksGrainsKeepsMassAndWritesVoidRatioAndK0) {
     const Json st = Json::parse(slurp(out / "bpm_stages.json"));
     EXPECT_NEAR(st["stages"]["e0"].get<double>(), e_first, 0.05 * e_first);
     EXPECT_TRUE(st["stages"]["I_to_II_Pa"].is_number()) << st["stages"].dump();
+    // A run that did not finish leaves series.csv.part: the script reads that, with the same stages.
+    const fs::path part = out.string() + "_unfinished";
+    fs::remove_all(part);
+    fs::create_directories(part);
+    fs::copy_file(out / "series.csv", part / "series.csv.part");
+    const std::string cmd2 = std::string("python3 ") + CRUMBLE_SOURCE_DIR + "/scripts/bpm_stages.py " + part.string() +
+                             " > /dev/null";
+    ASSERT_EQ(std::system(cmd2.c_str()), 0) << cmd2;
+    EXPECT_EQ(Json::parse(slurp(part / "bpm_stages.json"))["stages"], st["stages"]);
   }
 }
