@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scenarios/Registry.h"
+#include "scenarios/ThreadCheck.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
@@ -265,6 +266,20 @@ TEST(Cli, SignalStopsTheRunWithEveryOutput) {
   EXPECT_EQ(s["interrupted"], true);
   EXPECT_TRUE(fs::exists(out / "series.csv"));
   EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
+}
+
+// More threads than CPUs: the run says so on stderr, even with --quiet, and still runs
+// (docs/performance.md, "Threads on a busy machine").
+TEST(Cli, MoreThreadsThanCpusWarns) {
+  const int cpus = crumble::current_cpu_load().cpus;
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "too_many_threads";
+  fs::remove_all(out);
+  const Result r = run("run " + scenario_file("good.json", kGood) + " --quiet --out " + out.string() +
+                       " --set simulation.max_steps=5 --threads " + std::to_string(cpus + 1));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: --threads " + std::to_string(cpus + 1) + " on " + std::to_string(cpus) + " CPUs"),
+            std::string::npos)
+      << r.output;
 }
 
 TEST(Cli, CrushableRunDoesNotDependOnThreads) {
