@@ -230,7 +230,10 @@ int main(int argc, char** argv) {
   run->add_option("--out", out, "output directory")->required();
   run->add_option("--set", sets, "override a scenario value: path=value (e.g. engine.type=lsdem)");
   run->add_option("--seed", seed, "random seed (overrides the scenario's)");
-  run->add_option("--threads", threads, "threads (overrides the scenario's)")->check(CLI::Range(1, 1024));
+  run->add_option("--threads", threads,
+                  "threads (overrides the scenario's); a warning when more than the idle CPUs "
+                  "(docs/performance.md, \"Threads on a busy machine\")")
+      ->check(CLI::Range(1, 1024));
   run->add_flag("--quiet", quiet,
                 "no progress on stderr (otherwise a line with an ETA every 2 s on a terminal, every 60 s in a log)");
   run->add_flag("--resume", resume,
