@@ -188,7 +188,7 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   guard_max_.max_overlap_fraction = std::max(guard_max_.max_overlap_fraction, r.max_overlap_fraction);
   guard_max_.energy_ratio = std::max(guard_max_.energy_ratio, r.energy_ratio);
   if (r.small_grain_overlaps > 0 && guard_max_.small_grain_overlaps == 0)
-    std::cerr << "warning: a grain smaller than " << settings_.guards.small_grain_fraction
+    std::cerr << "crumble: warning: a grain smaller than " << settings_.guards.small_grain_fraction
               << " of the initial mean diameter overlaps a neighbour by more than "
               << settings_.guards.max_overlap_fraction << " of its size at step " << step_
               << " (counted in summary.json: guard_small_grain_overlaps)\n";
@@ -204,7 +204,7 @@ void Simulation::remove_escaped(const std::vector<GrainId>& ids) {
     const Grain& g = grains_[i];
     if (std::find(ids.begin(), ids.end(), g.id) == ids.end()) continue;
     if (guard_max_.small_grains_removed == 0)
-      std::cerr << "warning: grain " << g.id << " (d = " << g.shape->equivalent_diameter()
+      std::cerr << "crumble: warning: grain " << g.id << " (d = " << g.shape->equivalent_diameter()
                 << " m, below simulation.guards.small_grain_fraction " << settings_.guards.small_grain_fraction
                 << " of the initial mean diameter) left the container at step " << step_
                 << "; taken out as fines (counted in summary.json: guard_small_grains_removed)\n";
@@ -289,7 +289,7 @@ RunSummary Simulation::run(const Progress& progress) {
       if (!settings_.auto_reduce_dt)
         throw std::runtime_error("time step exceeds the engine's stable step after breakage");
       if (dt_reductions_ == 0 || dt_ != bound)
-        std::cerr << "warning: time step " << dt << " s reduced to the engine's stable step " << bound
+        std::cerr << "crumble: warning: time step " << dt << " s reduced to the engine's stable step " << bound
                   << " s at t = " << time_ << " s\n";
       dt = bound;
       ++dt_reductions_;
