@@ -45,7 +45,7 @@ std::string thread_oversubscription_warning(int threads, const CpuLoad& load) {
   const int idle = std::max(0, load.cpus - load.others_running);
   if (threads <= idle || load.wait_policy_set) return "";
   os << "--threads " << threads << " with " << idle << " of " << load.cpus << " CPUs idle ("
-     << load.others_running << " other threads running): OpenMP threads spin at every barrier and a step can take "
+     << "other runnable threads: " << load.others_running << "): OpenMP threads spin at every barrier and a step can take "
      << "20x longer than on one thread while another process holds a CPU (docs/performance.md, \"Threads on a busy "
      << "machine\"); use --threads " << std::max(1, idle) << ", or set OMP_WAIT_POLICY=passive before starting crumble";
   return os.str();
