@@ -227,8 +227,9 @@ RunResult execute(const RunRequest& req) {
   const RepresentationCounts built_before = representations_built();
   Scenario sc = build_request(req);
   for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
-  if (const std::string w = thread_oversubscription_warning(sc.threads, current_cpu_load()); !w.empty())
-    std::cerr << "crumble: warning: " << w << "\n";
+  if (sc.threads > 1)  // one thread never waits at a barrier: no need to read the machine's load
+    if (const std::string w = thread_oversubscription_warning(sc.threads, current_cpu_load()); !w.empty())
+      std::cerr << "crumble: warning: " << w << "\n";
   if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
   if (req.resume && req.packing_only) throw InputError("--resume: a packing stage has nothing to resume");
   double settle_before = -1;
