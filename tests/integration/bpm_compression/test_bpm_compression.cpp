@@ -84,10 +84,15 @@ TEST(BpmCompression, QuickRunBreaksGrainsKeepsMassAndWritesVoidRatioAndK0) {
 
   // The stage script reads the run (skipped where python3 is missing).
   if (std::system("python3 --version > /dev/null 2>&1") == 0) {
-    const std::string cmd = std::string("python3 ") + CRUMBLE_SOURCE_DIR + "/scripts/bpm_stages.py " + out.string() +
-                            " > /dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    const Json st = Json::parse(slurp(out / "bpm_stages.json"));
+    // Runs the script on a run folder and returns its bpm_stages.json ("" on failure).
+    auto stages_of = [](const fs::path& dir) -> std::string {
+      const std::string cmd =
+          std::string("python3 ") + CRUMBLE_SOURCE_DIR + "/scripts/bpm_stages.py " + dir.string() + " > /dev/null";
+      return std::system(cmd.c_str()) == 0 ? slurp(dir / "bpm_stages.json") : "";
+    };
+    const std::string full = stages_of(out);
+    ASSERT_FALSE(full.empty()) << out;
+    const Json st = Json::parse(full);
     EXPECT_NEAR(st["stages"]["e0"].get<double>(), e_first, 0.05 * e_first);
     EXPECT_TRUE(st["stages"]["I_to_II_Pa"].is_number()) << st["stages"].dump();
     // A run that did not finish leaves series.csv.part: the script reads that, with the same stages.
@@ -95,9 +100,8 @@ TEST(BpmCompression, QuickRunBreaksGrainsKeepsMassAndWritesVoidRatioAndK0) {
     fs::remove_all(part);
     fs::create_directories(part);
     fs::copy_file(out / "series.csv", part / "series.csv.part");
-    const std::string cmd2 = std::string("python3 ") + CRUMBLE_SOURCE_DIR + "/scripts/bpm_stages.py " + part.string() +
-                             " > /dev/null";
-    ASSERT_EQ(std::system(cmd2.c_str()), 0) << cmd2;
-    EXPECT_EQ(Json::parse(slurp(part / "bpm_stages.json"))["stages"], st["stages"]);
+    const std::string unfinished = stages_of(part);
+    ASSERT_FALSE(unfinished.empty()) << part;
+    EXPECT_EQ(Json::parse(unfinished)["stages"], st["stages"]);
   }
 }
