@@ -4,8 +4,10 @@
 #include "breakage/peridynamics/PdKernel.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -55,7 +57,6 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
   for (auto* v : {&vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &bx_, &by_, &bz_, &g_, &a_, &b_}) v->assign(n, 0.0);
   free_.assign(n, 1.0);
   alive_ = L_.weight;
-  cur_.assign(alive_.size(), 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     // Zhu & Zhao 2019 eq. 3: weighted volume m = Σ ω |ξ|² V_j (ω = 1; V_j with its partial-volume weight)
     double m = 0;
@@ -67,6 +68,129 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
       b_[i] = 15.0 * mat_.shear * V / m;
     }
   }
+  build_box();
+}
+
+void PdSystem::build_box() {
+  // The bond offsets in use (from the CSR: whatever stencil built the lattice), and the
+  // positive half of them: dz > 0, or dz = 0 and dy > 0, or dz = dy = 0 and dx > 0.
+  const std::size_t n = size();
+  std::map<std::array<int, 3>, double> offsets;  // offset → reference length
+  int H = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
+      const auto& ci = L_.cell[i];
+      const auto& cj = L_.cell[static_cast<std::size_t>(L_.neighbours[q])];
+      const std::array<int, 3> d{cj[0] - ci[0], cj[1] - ci[1], cj[2] - ci[2]};
+      offsets.emplace(d, L_.length[q]);
+      H = std::max({H, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+    }
+  std::vector<std::pair<std::array<int, 3>, double>> half;
+  for (const auto& [d, len] : offsets)
+    if (d[2] > 0 || (d[2] == 0 && (d[1] > 0 || (d[1] == 0 && d[0] > 0)))) half.emplace_back(d, len);
+  // Ordered by dx first: consecutive bonds of a block then add into cells a row or more
+  // apart, not into overlapping runs of 4 (a store still in flight would stall the next load).
+  std::stable_sort(half.begin(), half.end(), [](const auto& a, const auto& b) {
+    return std::array<int, 3>{a.first[0], a.first[2], a.first[1]} < std::array<int, 3>{b.first[0], b.first[2], b.first[1]};
+  });
+
+  // The box: the lattice's bounding box, padded by the reach H of a bond on every side and by
+  // 3 more cells in +x (a block's last lanes may pass the end of its row).
+  std::array<int, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+  for (const auto& c : L_.cell)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+  const std::array<int, 3> org{lo[0] - H, lo[1] - H, lo[2] - H};
+  const std::int64_t nx = hi[0] - lo[0] + 1 + 2 * H + 3, ny = hi[1] - lo[1] + 1 + 2 * H, nz = hi[2] - lo[2] + 1 + 2 * H;
+  if (nx * ny * nz > 200'000'000) throw std::invalid_argument("peridynamics: lattice too large for its box layout");
+  const auto cell_index = [&](int x, int y, int z) {
+    return ((static_cast<std::int64_t>(z) - org[2]) * ny + (y - org[1])) * nx + (x - org[0]);
+  };
+  Box& B = box_;
+  const std::size_t nbox = static_cast<std::size_t>(nx * ny * nz);
+  for (auto* v : {&B.x, &B.y, &B.z, &B.at, &B.b, &B.th, &B.fx, &B.fy, &B.fz}) v->assign(nbox, 0.0);
+  for (std::int64_t z = 0; z < nz; ++z)  // cells without a point keep their reference position
+    for (std::int64_t y = 0; y < ny; ++y)
+      for (std::int64_t x = 0; x < nx; ++x) {
+        const std::size_t c = static_cast<std::size_t>((z * ny + y) * nx + x);
+        B.x[c] = static_cast<double>(x + org[0]) * L_.spacing;
+        B.y[c] = static_cast<double>(y + org[1]) * L_.spacing;
+        B.z[c] = static_cast<double>(z + org[2]) * L_.spacing;
+      }
+  std::vector<std::int32_t> who(nbox, -1);
+  B.cell.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    B.cell[i] = cell_index(L_.cell[i][0], L_.cell[i][1], L_.cell[i][2]);
+    who[static_cast<std::size_t>(B.cell[i])] = static_cast<std::int32_t>(i);
+    B.b[static_cast<std::size_t>(B.cell[i])] = b_[i];
+  }
+  const auto csr_entry = [&](std::int32_t i, std::int32_t j) {  // rows are sorted by neighbour
+    const auto* b = L_.neighbours.data() + L_.offsets[i];
+    const auto* e = L_.neighbours.data() + L_.offsets[i + 1];
+    const auto* it = std::lower_bound(b, e, j);
+    return it != e && *it == j ? static_cast<std::int32_t>(it - L_.neighbours.data()) : -1;
+  };
+
+  // Blocks: runs of 4 cells along x from the start of each row segment (points are sorted
+  // z, y, x). Slabs of T >= H cells in z, so a slab's additions reach only itself and the next.
+  const int T = std::max(H, 1);
+  B.block_cell.clear();
+  B.block_group.assign(1, 0);
+  B.delta.clear();
+  B.len.clear();
+  B.alive.clear();
+  B.csr.clear();
+  B.slab_blocks.assign(1, 0);
+  int slab = 0;
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i;
+    while (j + 1 < n && L_.cell[j + 1][1] == L_.cell[i][1] && L_.cell[j + 1][2] == L_.cell[i][2] &&
+           L_.cell[j + 1][0] == L_.cell[j][0] + 1)
+      ++j;
+    const int s = (L_.cell[i][2] - lo[2]) / T;
+    while (slab < s) B.slab_blocks.push_back(static_cast<std::int32_t>(B.block_cell.size())), ++slab;
+    for (std::size_t p0 = i; p0 <= j; p0 += 4) {
+      const std::int64_t c = B.cell[p0];
+      const int lanes = static_cast<int>(std::min<std::size_t>(4, j - p0 + 1));
+      for (const auto& [d, len] : half) {
+        const std::int64_t dc = (static_cast<std::int64_t>(d[2]) * ny + d[1]) * nx + d[0];
+        double al[4] = {0, 0, 0, 0};
+        std::int32_t qq[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+        bool any = false;
+        for (int l = 0; l < lanes; ++l) {
+          const auto pi = static_cast<std::int32_t>(p0 + l);
+          const std::int32_t pj = who[static_cast<std::size_t>(c + l + dc)];
+          if (pj < 0) continue;
+          const std::int32_t qij = csr_entry(pi, pj), qji = csr_entry(pj, pi);
+          if (qij < 0 || qji < 0) continue;
+          al[l] = alive_[qij];
+          qq[2 * l] = qij;
+          qq[2 * l + 1] = qji;
+          any = true;
+        }
+        if (!any) continue;
+        B.delta.push_back(dc);
+        B.len.push_back(len);
+        B.alive.insert(B.alive.end(), al, al + 4);
+        B.csr.insert(B.csr.end(), qq, qq + 8);
+      }
+      B.block_cell.push_back(c);
+      B.block_group.push_back(static_cast<std::int32_t>(B.delta.size()));
+    }
+    i = j + 1;
+  }
+  B.slab_blocks.push_back(static_cast<std::int32_t>(B.block_cell.size()));
+  if (B.delta.size() > static_cast<std::size_t>(INT32_MAX / 8))
+    throw std::invalid_argument("peridynamics: too many bonds for the box layout");
+  B.cur.assign(B.alive.size(), 0.0);
+}
+
+void PdSystem::sync_alive() const {
+  if (!box_broke_) return;
+  for (std::size_t k = 0; k < box_.alive.size(); ++k)
+    if (box_.alive[k] == 0.0)
+      for (int e = 0; e < 2; ++e)
+        if (const std::int32_t q = box_.csr[2 * k + e]; q >= 0) alive_[static_cast<std::size_t>(q)] = 0.0;
+  box_broke_ = false;
 }
 
 void PdSystem::fix(const std::vector<std::int32_t>& pts) {
@@ -118,30 +242,48 @@ double PdSystem::stable_dt() const {
 }
 
 void PdSystem::compute_forces(int threads) {
-  const std::int32_t n = static_cast<std::int32_t>(size());
-  const std::int32_t* off = L_.offsets.data();
-  const std::int32_t* nbr = L_.neighbours.data();
-  const double* len = L_.length.data();
   threads = std::max(1, threads);
-  if (threads == 1) {
-    kernel::dilatation(0, n, off, nbr, len, alive_.data(), cur_.data(), pos_.data(), g_.data(), a_.data(), sc_);
-    kernel::force(0, n, off, nbr, len, alive_.data(), cur_.data(), b_.data(), pos_.data(), fx_.data(), fy_.data(), fz_.data());
-    return;
+  const std::size_t n = size();
+  Box& B = box_;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<std::size_t>(B.cell[i]);
+    B.x[c] = pos_[4 * i];
+    B.y[c] = pos_[4 * i + 1];
+    B.z[c] = pos_[4 * i + 2];
+    B.th[c] = B.fx[c] = B.fy[c] = B.fz[c] = 0.0;
   }
-  // Blocks of rows per thread; each row is computed exactly as in the serial call.
-  const std::int32_t chunk = 64;
-  const std::int32_t blocks = (n + chunk - 1) / chunk;
-#pragma omp parallel num_threads(threads)
+  const kernel::BoxView v{B.x.data(), B.y.data(), B.z.data(), B.at.data(), B.b.data(), B.th.data(),
+                          B.fx.data(), B.fy.data(), B.fz.data(), B.block_cell.data(), B.block_group.data(),
+                          B.delta.data(), B.len.data(), B.alive.data(), B.cur.data()};
+  const int slabs = static_cast<int>(B.slab_blocks.size()) - 1;
+  const std::int32_t* sb = B.slab_blocks.data();
+  const auto points = static_cast<std::int64_t>(n);
+  bool broke = false;
+  // Even slabs, then odd ones: the same order of additions into every cell for any thread count.
+#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : broke)
   {
+    for (int parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(static)
-    for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), cur_.data(), pos_.data(), g_.data(),
-                         a_.data(), sc_);
+      for (int s = parity; s < slabs; s += 2) broke = kernel::dilatation(v, sb[s], sb[s + 1], sc_) || broke;
+    }
 #pragma omp for schedule(static)
-    for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, alive_.data(), cur_.data(), b_.data(), pos_.data(),
-                    fx_.data(), fy_.data(), fz_.data());
+    for (std::int64_t i = 0; i < points; ++i) {  // Zhu & Zhao 2019 eq. 4: θ_i = g_i Σ; stored as a_i θ_i
+      const auto c = static_cast<std::size_t>(B.cell[static_cast<std::size_t>(i)]);
+      B.at[c] = a_[static_cast<std::size_t>(i)] * g_[static_cast<std::size_t>(i)] * B.th[c];
+      pos_[4 * static_cast<std::size_t>(i) + 3] = B.at[c];
+    }
+    for (int parity = 0; parity < 2; ++parity) {
+#pragma omp for schedule(static)
+      for (int s = parity; s < slabs; s += 2) kernel::force(v, sb[s], sb[s + 1]);
+    }
   }
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<std::size_t>(B.cell[i]);
+    fx_[i] = B.fx[c];
+    fy_[i] = B.fy[c];
+    fz_[i] = B.fz[c];
+  }
+  if (broke) box_broke_ = true;
 }
 
 void PdSystem::step(double dt, double lambda, double damping, int threads) {
@@ -164,6 +306,7 @@ void PdSystem::step(double dt, double lambda, double damping, int threads) {
 void PdSystem::apply_operator(const Field3& u, Field3& out, int threads) const {
   // out = −f_lin(u) on free points, 0 on fixed ones: the stiffness operator (per unit
   // volume) of the small-displacement problem.
+  sync_alive();
   const std::int32_t n = static_cast<std::int32_t>(size());
   const std::int32_t* off = L_.offsets.data();
   const std::int32_t* nbr = L_.neighbours.data();
@@ -287,6 +430,7 @@ double PdSystem::spectral_dt(int iterations, int threads) const {
 }
 
 double PdSystem::first_break_factor(const std::vector<double>& u) const {
+  sync_alive();
   double lambda = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < size(); ++i)
     for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
@@ -325,12 +469,14 @@ double PdSystem::external_work_at_rest() const {
 }
 
 long PdSystem::broken_bonds() const {
+  sync_alive();
   long k = 0;
   for (std::size_t q = 0; q < alive_.size(); ++q) k += alive_[q] == 0.0;
   return k;
 }
 
 long PdSystem::broken_face_bonds() const {
+  sync_alive();
   long k = 0;
   for (std::size_t i = 0; i < size(); ++i)
     for (auto q : L_.face_bond[i]) k += q >= 0 && alive_[q] == 0.0;
@@ -343,6 +489,7 @@ double PdSystem::displacement(std::int32_t i, int axis) const {
 }
 
 double PdSystem::dilatation(std::int32_t i) const {
+  sync_alive();
   double acc = 0;
   for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
     const Vec3 Y = current(L_.neighbours[q]) - current(i);
@@ -352,6 +499,7 @@ double PdSystem::dilatation(std::int32_t i) const {
 }
 
 Mat3 PdSystem::partial_stress(std::int32_t i) const {
+  sync_alive();
   // θ_i from the current positions (eq. 4), then Σ_j w V t_ij M ⊗ ξ.
   const double ati = a_[i] * dilatation(i);
   Mat3 s = Mat3::zero();

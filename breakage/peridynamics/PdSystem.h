@@ -1,12 +1,15 @@
 // The linear peridynamic solid (LPS, Zhu & Zhao 2019 eqs. 1–4, influence function 1) on a
 // Lattice, with critical-stretch bond breakage and explicit time integration.
 //
-// Positions are stored as (x, y, z, aθ) per point (PdKernel.h), the rest as structures of
-// arrays; bonds as CSR with a per-bond factor `alive`
-// = (partial-volume weight) × (0 once broken), so the hot loops multiply instead of
-// branching on broken bonds. Each point sums over its own full bond list: a pass over the
-// points can be split between threads without atomics, and every point's sum is computed
-// in the same order whatever the thread count (results are bitwise independent of it).
+// Bonds are stored twice. The explicit passes run on a box layout with a half bond list
+// (PdKernel.h): every pair bond once, with a factor `alive` = (partial-volume weight) × (0 once
+// broken), so the hot loops multiply instead of branching on broken bonds. The lattice's
+// CSR lists (each point's full family) carry the same factors for everything else (clusters,
+// damage, the linearised passes); they are brought up to date from the box when read.
+// A pass adds each bond to both of its points, so blocks are dealt to threads by slabs of
+// cells in z, thick enough that two slabs of one colour never touch the same cell; the even
+// slabs run first, then the odd ones, whatever the thread count, so every cell receives its
+// additions in the same order and results are bitwise independent of the thread count.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -93,7 +96,11 @@ class PdSystem {
   // Positions X + scale·u, velocities vscale·u (the quasi-static state of a linear ramp).
   void set_state(const std::vector<double>& u, double scale, double vscale);
 
-  const std::vector<double>& alive() const { return alive_; }
+  // Per CSR bond: weight, or 0 once broken.
+  const std::vector<double>& alive() const {
+    sync_alive();
+    return alive_;
+  }
   double load_factor() const { return lambda_; }
 
  private:
@@ -108,6 +115,8 @@ class PdSystem {
     void axpy(double a, const Field3& o);
   };
   void apply_operator(const Field3& u, Field3& out, int threads) const;
+  void build_box();
+  void sync_alive() const;
 
   const Lattice& L_;
   LpsMaterial mat_;
@@ -121,8 +130,21 @@ class PdSystem {
   std::vector<double> g_;             // 3V/m_i (eq. 4)
   std::vector<double> a_;             // V(3K − 5μ)/m_i
   std::vector<double> b_;             // 15μV/m_i
-  std::vector<double> alive_;         // per bond: weight, or 0 once broken
-  std::vector<double> cur_;           // per bond: current length |Y| of the last force pass (scratch)
+  mutable std::vector<double> alive_;  // per CSR bond: weight, or 0 once broken (see sync_alive)
+
+  // The box layout of the explicit passes (PdKernel.h BoxView).
+  struct Box {
+    std::vector<std::int64_t> cell;  // per point: its box cell
+    std::vector<double> x, y, z, at, b, th, fx, fy, fz;  // per box cell
+    std::vector<std::int64_t> block_cell;
+    std::vector<std::int32_t> block_group;
+    std::vector<std::int64_t> delta;
+    std::vector<double> len;
+    std::vector<double> alive, cur;         // 4 per group
+    std::vector<std::int32_t> csr;          // 8 per group: the two CSR entries of each lane's bond, or -1
+    std::vector<std::int32_t> slab_blocks;  // blocks of slab s: [slab_blocks[s], slab_blocks[s + 1])
+  } box_;
+  mutable bool box_broke_ = false;  // a bond broke in the box since alive_ was last brought up to date
 };
 
 }  // namespace crumble::pd

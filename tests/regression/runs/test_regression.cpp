@@ -2,7 +2,7 @@
 // figures (tests/regression/data/*.json). Each figure carries its own tolerance, kept apart
 // from the physics tolerances of the unit tests (STYLE.md §6): single-grain figures are
 // deterministic up to round-off (1e-6); packing figures come from chaotic dynamics, where
-// round-off differences between CPUs (e.g. the AVX-512 and portable peridynamics kernels)
+// round-off differences between CPUs (e.g. libm or compiler differences in the peridynamics kernels)
 // grow, so they get a few per cent.
 //
 // Regenerate after an intended change: CRUMBLE_REGENERATE=1 ./tests/test_runs

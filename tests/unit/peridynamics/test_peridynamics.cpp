@@ -272,77 +272,102 @@ TEST(PeridynamicsElastic, AffineFieldIsInEquilibriumInTheBulk) {
 
 // ------------------------------------------------------------------ kernel properties
 
-// The dispatched kernel (AVX-512 when present) agrees with the portable one; splitting
-// the rows between threads changes no bit.
+// The box kernel (half bond list, PdKernel.h) against the plain formulation of Zhu & Zhao
+// 2019 eqs. 1–4 summed over each point's full CSR family, written out here: the same broken
+// bonds and the same forces up to round-off (the sums run in another order).
+TEST(PeridynamicsKernel, HalfBondBoxMatchesFullFamilySums) {
+  const auto s = Shape::sphere(1e-3);
+  const double h = 0.1 * s->equivalent_diameter();
+  const Lattice L = pd::build_lattice(pd::lattice_points(*s, h), h, 3.0002, true);
+  const auto mat = LpsMaterial::from_young(100e9, 0.15, 2650);
+  const double sc = 5e-4;
+  PdSystem sys(L, mat, sc);
+  auto field = [](const Vec3& p) {
+    return Vec3{std::sin(1.7e7 * p.y + 3e6 * p.z), std::cos(1.3e7 * p.z + 2e6 * p.x), std::sin(1.1e7 * p.x)} * 2e-6;
+  };
+  sys.set_displacement(field);
+  sys.compute_forces(1);
+  const std::size_t n = L.size();
+  const double V = L.point_volume;
+  std::vector<Vec3> x(n);
+  std::vector<double> g(n), a(n), b(n), at(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = L.points[i] + field(L.points[i]);
+    double m = 0;
+    for (std::int32_t q = L.offsets[i]; q < L.offsets[i + 1]; ++q) m += L.weight[q] * L.length[q] * L.length[q];
+    m *= V;
+    g[i] = 3 * V / m;
+    a[i] = V * (3 * mat.bulk - 5 * mat.shear) / m;
+    b[i] = 15 * mat.shear * V / m;
+  }
+  std::vector<double> alive = L.weight;
+  long broken = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double acc = 0;
+    for (std::int32_t q = L.offsets[i]; q < L.offsets[i + 1]; ++q) {
+      const double l = norm(x[L.neighbours[q]] - x[i]), r = L.length[q];
+      if (l - r > sc * r) alive[q] = 0, ++broken;
+      acc += alive[q] * r * (l - r);
+    }
+    at[i] = a[i] * g[i] * acc;
+  }
+  EXPECT_GT(broken, 0);
+  EXPECT_EQ(sys.alive(), alive);
+  EXPECT_EQ(sys.broken_bonds(), broken);
+  double fmax = 0, dmax = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 f{0, 0, 0};
+    for (std::int32_t q = L.offsets[i]; q < L.offsets[i + 1]; ++q) {
+      const auto j = static_cast<std::size_t>(L.neighbours[q]);
+      const Vec3 Y = x[j] - x[i];
+      const double l = norm(Y), r = L.length[q];
+      f += Y * (alive[q] * ((at[i] + at[j]) * r + (b[i] + b[j]) * (l - r)) / l);
+    }
+    fmax = std::max(fmax, norm(f));
+    dmax = std::max(dmax, norm(f - sys.force_density(static_cast<std::int32_t>(i))));
+  }
+  EXPECT_GT(fmax, 0);
+  EXPECT_LT(dmax, 1e-11 * fmax);
+}
+
+// Every version of the box kernel this CPU can run gives bitwise the same breaks and forces,
+// and so does any thread count (slabs of one colour never touch the same cell; PdSystem.h).
 TEST(PeridynamicsKernel, VariantsAndThreadsAgree) {
   const auto s = Shape::sphere(1e-3);
   const double h = 0.1 * s->equivalent_diameter();
   const Lattice L = pd::build_lattice(pd::lattice_points(*s, h), h, 3.0002, true);
   const std::size_t n = L.size();
-  std::mt19937_64 gen(7);
-  std::uniform_real_distribution<double> U(-1e-3, 1e-3);
-  std::vector<double> pos(4 * n), g(n), a(n), b(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    pos[4 * i] = L.points[i].x * (1 + U(gen));
-    pos[4 * i + 1] = L.points[i].y * (1 + U(gen));
-    pos[4 * i + 2] = L.points[i].z * (1 + U(gen));
-    g[i] = 1 + U(gen);
-    a[i] = 1 + U(gen);
-  }
-  for (auto& k : b) k = 1 + U(gen);
-  auto run = [&](const std::string& isa, std::vector<double>& alive, std::vector<double>& p, std::vector<double>& f) {
-    const std::int32_t N = static_cast<std::int32_t>(n);
-    f.assign(3 * n, 0);
-    std::vector<double> cur(alive.size(), 0.0);
-    if (isa == "portable") {
-      pd::kernel::dilatation_portable(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(),
-                                      cur.data(), p.data(), g.data(), a.data(), 5e-4);
-      pd::kernel::force_portable(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(), b.data(),
-                                 p.data(), f.data(), f.data() + n, f.data() + 2 * n);
-    } else {
-      pd::kernel::select_isa(isa);
-      pd::kernel::dilatation(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(),
-                             p.data(), g.data(), a.data(), 5e-4);
-      pd::kernel::force(0, N, L.offsets.data(), L.neighbours.data(), L.length.data(), alive.data(), cur.data(), b.data(), p.data(),
-                        f.data(), f.data() + n, f.data() + 2 * n);
-      pd::kernel::select_isa("");
-    }
-  };
-  // Every version sums each row in the same 8-lane order: bitwise the same breaks, dilatations
-  // and forces (PdKernel.cpp), so no tolerance here.
-  std::vector<double> al1 = L.weight, p1 = pos, f1;
-  run("portable", al1, p1, f1);
-  long broken = 0;
-  for (double w : al1) broken += w == 0;
-  EXPECT_GT(broken, 0);
-  double fmax = 0;
-  for (double v : f1) fmax = std::max(fmax, std::abs(v));
-  EXPECT_GT(fmax, 0);
-  for (const auto& isa : pd::kernel::available_isas()) {
-    std::vector<double> al2 = L.weight, p2 = pos, f2;
-    run(isa, al2, p2, f2);
-    EXPECT_EQ(al1, al2) << isa;  // same bonds broken
-    EXPECT_EQ(p1, p2) << isa;    // same a θ
-    EXPECT_EQ(f1, f2) << isa;
-  }
-  EXPECT_THROW(pd::kernel::select_isa("sse9"), std::invalid_argument);
-  std::printf("kernel isa: %s\n", pd::kernel::isa());
-
-  // threads: splitting the rows between 2 threads changes no bit (forces, broken bonds)
   const auto mat = LpsMaterial::from_young(100e9, 0.15, 2650);
-  PdSystem s1(L, mat, 5e-4), s2(L, mat, 5e-4);
   auto field = [&](const Vec3& p) { return Vec3{std::sin(4e3 * p.y), std::cos(3e3 * p.z), std::sin(5e3 * p.x)} * 2e-7; };
-  s1.set_displacement(field);
-  s2.set_displacement(field);
-  s1.compute_forces(1);
-  s2.compute_forces(2);
-  EXPECT_EQ(s1.alive(), s2.alive());
-  EXPECT_GT(s1.broken_bonds(), 0);
-  for (std::int32_t i = 0; i < static_cast<std::int32_t>(n); ++i) {
-    EXPECT_EQ(s1.force_density(i).x, s2.force_density(i).x);
-    EXPECT_EQ(s1.force_density(i).y, s2.force_density(i).y);
-    EXPECT_EQ(s1.force_density(i).z, s2.force_density(i).z);
-  }
+  struct State {
+    std::vector<double> alive, f;
+  };
+  auto run = [&](const std::string& isa, int threads) {
+    pd::kernel::select_isa(isa);
+    PdSystem sys(L, mat, 5e-4);
+    sys.set_displacement(field);
+    for (int k = 0; k < 3; ++k) sys.step(1e-9, 0.0, 0.0, threads);
+    pd::kernel::select_isa("");
+    State st{sys.alive(), {}};
+    for (std::int32_t i = 0; i < static_cast<std::int32_t>(n); ++i) {
+      const Vec3 f = sys.force_density(i);
+      st.f.insert(st.f.end(), {f.x, f.y, f.z, sys.displacement(i, 0)});
+    }
+    return st;
+  };
+  const State ref = run("generic", 1);
+  long broken = 0;
+  for (double w : ref.alive) broken += w == 0;
+  EXPECT_GT(broken, 0);
+  for (const auto& isa : pd::kernel::available_isas())
+    for (int threads : {1, 2, 3}) {
+      const State st = run(isa, threads);
+      EXPECT_EQ(st.alive, ref.alive) << isa << " threads " << threads;  // same bonds broken
+      EXPECT_EQ(st.f, ref.f) << isa << " threads " << threads;
+    }
+  EXPECT_THROW(pd::kernel::select_isa("sse9"), std::invalid_argument);
+  EXPECT_THROW(pd::kernel::select_isa("avx512"), std::invalid_argument);
+  std::printf("kernel isa: %s\n", pd::kernel::isa());
 }
 
 // Each bond is stored at both ends; both copies must break at the same step (the force
