@@ -270,7 +270,6 @@ void PdSystem::compute_forces(int threads) {
     for (std::int64_t i = 0; i < points; ++i) {  // Zhu & Zhao 2019 eq. 4: θ_i = g_i Σ; stored as a_i θ_i
       const auto c = static_cast<std::size_t>(B.cell[static_cast<std::size_t>(i)]);
       B.at[c] = a_[static_cast<std::size_t>(i)] * g_[static_cast<std::size_t>(i)] * B.th[c];
-      pos_[4 * static_cast<std::size_t>(i) + 3] = B.at[c];
     }
     for (int parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(static)

@@ -123,7 +123,7 @@ class PdSystem {
   double sc_;
   double lambda_ = 0;
   std::vector<double> rx_, ry_, rz_;  // reference positions
-  std::vector<double> pos_;  // per point x, y, z (current, m) and a_i θ_i of the last pass
+  std::vector<double> pos_;  // per point x, y, z (current, m) and a spare slot (a θ lives in box_.at)
   std::vector<double> vx_, vy_, vz_, fx_, fy_, fz_;
   std::vector<double> bx_, by_, bz_;  // body force density at load factor 1, N/m³
   std::vector<double> free_;          // 1 free, 0 fixed
