@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -11,21 +10,18 @@
 #include "tests/support/CliRunner.h"
 
 using crumble::testing_support::run_cli;
+using crumble::testing_support::scenario_file;
 using Json = nlohmann::json;
-namespace fs = std::filesystem;
 
 namespace {
 
-// The rigid quick oedometer with 30 grains (the benchmark places them and lets them fall).
+// The rigid quick oedometer with 30 grains (the benchmark places them and lets them fall), in
+// a folder of the current test's own (ctest runs this program's tests side by side).
 std::string small_scenario() {
-  const fs::path dir = fs::temp_directory_path() / "crumble_bench_engine";
-  fs::create_directories(dir);
   std::ifstream in(std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json");
   Json doc = Json::parse(in);
   doc["packing"]["count"] = 30;
-  const fs::path f = dir / "small.json";
-  std::ofstream(f) << doc.dump(1);
-  return f.string();
+  return scenario_file("crumble_bench_engine", "small.json", doc.dump(1));
 }
 
 Json bench(const std::string& engine) {
@@ -94,13 +90,11 @@ TEST(BenchEngine, BadInputIsExit2) {
 // lattice's error); a stress-model scenario is refused. (single_grain_pd runs on Bullet.)
 #if CRUMBLE_WITH_BULLET
 TEST(BenchPdAnalysis, CrushesTheReferenceGrainAndRefusesOtherModels) {
-  const fs::path dir = fs::temp_directory_path() / "crumble_bench_pd_analysis";
-  fs::create_directories(dir);
   std::ifstream in(std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/single_grain_pd.json");
   Json doc = Json::parse(in);
   doc["breakage"]["spacing_fraction"] = 0.1;
-  std::ofstream(dir / "coarse.json") << doc.dump(1);
-  auto r = run_cli("bench pd-analysis --steps 1 --scenario " + (dir / "coarse.json").string());
+  auto r = run_cli("bench pd-analysis --steps 1 --scenario " +
+                   scenario_file("crumble_bench_pd_analysis", "coarse.json", doc.dump(1)));
   ASSERT_EQ(r.status, 0) << r.output;
   const Json j = Json::parse(r.output);
   EXPECT_EQ(j.at("outcome"), "split");
