@@ -93,81 +93,226 @@ namespace {
 #ifdef CRUMBLE_PD_HAVE_AVX2
 // ---- AVX2: a block's 4 lanes in one register; the same operations in the same order. ----
 
+// One group (4 lanes) of each pass, shared by the AVX2 and the AVX-512 versions.
+#define CRUMBLE_PD_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
+
+CRUMBLE_PD_AVX2_INLINE void dilatation_group4(const BoxView& v, std::int32_t q, std::int64_t c, __m256d xi, __m256d yi,
+                                              __m256d zi, __m256d vsc, __m256d& acc, __m256d& broke) {
+  const std::int64_t cj = c + v.delta[q];
+  const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(v.x + cj), xi);
+  const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(v.y + cj), yi);
+  const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(v.z + cj), zi);
+  const __m256d l = _mm256_sqrt_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
+  _mm256_storeu_pd(v.cur + 4 * q, l);
+  const __m256d r = _mm256_set1_pd(v.len[q]);
+  const __m256d e = _mm256_sub_pd(l, r);
+  const __m256d old = _mm256_loadu_pd(v.alive + 4 * q);
+  const __m256d w = _mm256_and_pd(_mm256_cmp_pd(e, _mm256_mul_pd(vsc, r), _CMP_LE_OQ), old);
+  broke = _mm256_or_pd(broke, _mm256_cmp_pd(w, old, _CMP_NEQ_UQ));
+  _mm256_storeu_pd(v.alive + 4 * q, w);
+  const __m256d t = _mm256_mul_pd(_mm256_mul_pd(w, r), e);
+  acc = _mm256_add_pd(acc, t);
+  _mm256_storeu_pd(v.th + cj, _mm256_add_pd(_mm256_loadu_pd(v.th + cj), t));
+}
+
+struct Own4 {  // a block's own 4 points: position, aθ, b
+  __m256d x, y, z, at, b;
+};
+
+CRUMBLE_PD_AVX2_INLINE void force_group4(const BoxView& v, std::int32_t q, std::int64_t c, const Own4& o, __m256d& sx,
+                                         __m256d& sy, __m256d& sz) {
+  const __m256d tiny = _mm256_set1_pd(1e-3);
+  const std::int64_t cj = c + v.delta[q];
+  const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(v.x + cj), o.x);
+  const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(v.y + cj), o.y);
+  const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(v.z + cj), o.z);
+  const __m256d l = _mm256_loadu_pd(v.cur + 4 * q);
+  const __m256d r = _mm256_set1_pd(v.len[q]);
+  const __m256d t = _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(o.at, _mm256_loadu_pd(v.at + cj)), r),
+                                  _mm256_mul_pd(_mm256_add_pd(o.b, _mm256_loadu_pd(v.b + cj)), _mm256_sub_pd(l, r)));
+  const __m256d s =
+      _mm256_div_pd(_mm256_mul_pd(_mm256_loadu_pd(v.alive + 4 * q), t), _mm256_max_pd(l, _mm256_mul_pd(tiny, r)));
+  const __m256d gx = _mm256_mul_pd(s, dx), gy = _mm256_mul_pd(s, dy), gz = _mm256_mul_pd(s, dz);
+  sx = _mm256_add_pd(sx, gx);
+  sy = _mm256_add_pd(sy, gy);
+  sz = _mm256_add_pd(sz, gz);
+  _mm256_storeu_pd(v.fx + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj), gx));
+  _mm256_storeu_pd(v.fy + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj), gy));
+  _mm256_storeu_pd(v.fz + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj), gz));
+}
+
+CRUMBLE_PD_AVX2_INLINE Own4 own4(const BoxView& v, std::int64_t c) {
+  return {_mm256_loadu_pd(v.x + c), _mm256_loadu_pd(v.y + c), _mm256_loadu_pd(v.z + c), _mm256_loadu_pd(v.at + c),
+          _mm256_loadu_pd(v.b + c)};
+}
+
+CRUMBLE_PD_AVX2_INLINE void add4(double* p, __m256d s) { _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), s)); }
+
 __attribute__((target("avx2"))) bool dilatation_avx2(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc) {
   const __m256d vsc = _mm256_set1_pd(sc);
-  const double *X = v.x, *Y = v.y, *Z = v.z;
-  double* T = v.th;
   __m256d broke = _mm256_setzero_pd();
   for (std::int32_t k = k0; k < k1; ++k) {
     const std::int64_t c = v.block_cell[k];
-    const __m256d xi = _mm256_loadu_pd(X + c), yi = _mm256_loadu_pd(Y + c), zi = _mm256_loadu_pd(Z + c);
+    const __m256d xi = _mm256_loadu_pd(v.x + c), yi = _mm256_loadu_pd(v.y + c), zi = _mm256_loadu_pd(v.z + c);
     __m256d acc = _mm256_setzero_pd();
-    for (std::int32_t q = v.block_group[k]; q < v.block_group[k + 1]; ++q) {
-      const std::int64_t cj = c + v.delta[q];
-      const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(X + cj), xi);
-      const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(Y + cj), yi);
-      const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(Z + cj), zi);
-      const __m256d l = _mm256_sqrt_pd(
-          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
-      _mm256_storeu_pd(v.cur + 4 * q, l);
-      const __m256d r = _mm256_set1_pd(v.len[q]);
-      const __m256d e = _mm256_sub_pd(l, r);
-      const __m256d old = _mm256_loadu_pd(v.alive + 4 * q);
-      const __m256d w = _mm256_and_pd(_mm256_cmp_pd(e, _mm256_mul_pd(vsc, r), _CMP_LE_OQ), old);
-      broke = _mm256_or_pd(broke, _mm256_cmp_pd(w, old, _CMP_NEQ_UQ));
-      _mm256_storeu_pd(v.alive + 4 * q, w);
-      const __m256d t = _mm256_mul_pd(_mm256_mul_pd(w, r), e);
-      acc = _mm256_add_pd(acc, t);
-      _mm256_storeu_pd(T + cj, _mm256_add_pd(_mm256_loadu_pd(T + cj), t));
-    }
-    _mm256_storeu_pd(T + c, _mm256_add_pd(_mm256_loadu_pd(T + c), acc));
+    for (std::int32_t q = v.block_group[k]; q < v.block_group[k + 1]; ++q)
+      dilatation_group4(v, q, c, xi, yi, zi, vsc, acc, broke);
+    add4(v.th + c, acc);
   }
   return _mm256_movemask_pd(broke) != 0;
 }
 
 __attribute__((target("avx2"))) void force_avx2(const BoxView& v, std::int32_t k0, std::int32_t k1) {
-  const __m256d tiny = _mm256_set1_pd(1e-3);
-  const double *X = v.x, *Y = v.y, *Z = v.z, *AT = v.at, *B = v.b;
-  double *FX = v.fx, *FY = v.fy, *FZ = v.fz;
   for (std::int32_t k = k0; k < k1; ++k) {
     const std::int64_t c = v.block_cell[k];
-    const __m256d xi = _mm256_loadu_pd(X + c), yi = _mm256_loadu_pd(Y + c), zi = _mm256_loadu_pd(Z + c);
-    const __m256d ati = _mm256_loadu_pd(AT + c), bi = _mm256_loadu_pd(B + c);
+    const Own4 o = own4(v, c);
     __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
-    for (std::int32_t q = v.block_group[k]; q < v.block_group[k + 1]; ++q) {
-      const std::int64_t cj = c + v.delta[q];
-      const __m256d dx = _mm256_sub_pd(_mm256_loadu_pd(X + cj), xi);
-      const __m256d dy = _mm256_sub_pd(_mm256_loadu_pd(Y + cj), yi);
-      const __m256d dz = _mm256_sub_pd(_mm256_loadu_pd(Z + cj), zi);
-      const __m256d l = _mm256_loadu_pd(v.cur + 4 * q);
-      const __m256d r = _mm256_set1_pd(v.len[q]);
-      const __m256d t = _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(ati, _mm256_loadu_pd(AT + cj)), r),
-                                      _mm256_mul_pd(_mm256_add_pd(bi, _mm256_loadu_pd(B + cj)), _mm256_sub_pd(l, r)));
-      const __m256d s = _mm256_div_pd(_mm256_mul_pd(_mm256_loadu_pd(v.alive + 4 * q), t),
-                                      _mm256_max_pd(l, _mm256_mul_pd(tiny, r)));
-      const __m256d gx = _mm256_mul_pd(s, dx), gy = _mm256_mul_pd(s, dy), gz = _mm256_mul_pd(s, dz);
-      sx = _mm256_add_pd(sx, gx);
-      sy = _mm256_add_pd(sy, gy);
-      sz = _mm256_add_pd(sz, gz);
-      _mm256_storeu_pd(FX + cj, _mm256_sub_pd(_mm256_loadu_pd(FX + cj), gx));
-      _mm256_storeu_pd(FY + cj, _mm256_sub_pd(_mm256_loadu_pd(FY + cj), gy));
-      _mm256_storeu_pd(FZ + cj, _mm256_sub_pd(_mm256_loadu_pd(FZ + cj), gz));
-    }
-    _mm256_storeu_pd(FX + c, _mm256_add_pd(_mm256_loadu_pd(FX + c), sx));
-    _mm256_storeu_pd(FY + c, _mm256_add_pd(_mm256_loadu_pd(FY + c), sy));
-    _mm256_storeu_pd(FZ + c, _mm256_add_pd(_mm256_loadu_pd(FZ + c), sz));
+    for (std::int32_t q = v.block_group[k]; q < v.block_group[k + 1]; ++q) force_group4(v, q, c, o, sx, sy, sz);
+    add4(v.fx + c, sx);
+    add4(v.fy + c, sy);
+    add4(v.fz + c, sz);
   }
 }
+
+// ---- AVX-512: two groups of a block in one 8-lane register (their cells are 4 + 4 separate
+// loads; group q in the low half, q + 1 in the high half). The block's own sums add the low
+// half, then the high half, and the neighbour cells take group q's values before q + 1's:
+// the order of the 4-lane versions. Two groups whose neighbour runs overlap (offsets less
+// than 4 cells apart) go one at a time, as in the AVX2 version. ----
+#define CRUMBLE_PD_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2")))
+// GCC 12's AVX-512 intrinsics pass an undefined vector as the unused merge source of their
+// masked builtins, which -Wmaybe-uninitialized reports (GCC bug 105593, fixed in GCC 13).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+CRUMBLE_PD_AVX512 inline __m512d load_pair(const double* p, std::int64_t a, std::int64_t b) {
+  return _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_loadu_pd(p + a)), _mm256_loadu_pd(p + b), 1);
+}
+CRUMBLE_PD_AVX512 inline __m512d twice(__m256d x) { return _mm512_insertf64x4(_mm512_castpd256_pd512(x), x, 1); }
+CRUMBLE_PD_AVX512 inline __m512d len_pair(const BoxView& v, std::int32_t q) {
+  return _mm512_insertf64x4(_mm512_set1_pd(v.len[q]), _mm256_set1_pd(v.len[q + 1]), 1);
+}
+// true when groups q and q + 1 can go together (their neighbour runs of 4 cells are disjoint)
+inline bool pairable(const BoxView& v, std::int32_t q) {
+  const std::int64_t d = v.delta[q + 1] - v.delta[q];
+  return d >= 4 || d <= -4;
+}
+
+CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc) {
+  const __m256d vsc = _mm256_set1_pd(sc);
+  const __m512d vsc8 = _mm512_set1_pd(sc);
+  __m256d broke = _mm256_setzero_pd();
+  __mmask8 broke8 = 0;
+  for (std::int32_t k = k0; k < k1; ++k) {
+    const std::int64_t c = v.block_cell[k];
+    const __m256d xi = _mm256_loadu_pd(v.x + c), yi = _mm256_loadu_pd(v.y + c), zi = _mm256_loadu_pd(v.z + c);
+    const __m512d xi8 = twice(xi), yi8 = twice(yi), zi8 = twice(zi);
+    __m256d acc = _mm256_setzero_pd();
+    const std::int32_t q1 = v.block_group[k + 1];
+    std::int32_t q = v.block_group[k];
+    while (q < q1) {
+      if (q + 1 == q1 || !pairable(v, q)) {
+        dilatation_group4(v, q, c, xi, yi, zi, vsc, acc, broke);
+        ++q;
+        continue;
+      }
+      const std::int64_t cj0 = c + v.delta[q], cj1 = c + v.delta[q + 1];
+      const __m512d dx = _mm512_sub_pd(load_pair(v.x, cj0, cj1), xi8);
+      const __m512d dy = _mm512_sub_pd(load_pair(v.y, cj0, cj1), yi8);
+      const __m512d dz = _mm512_sub_pd(load_pair(v.z, cj0, cj1), zi8);
+      const __m512d l = _mm512_sqrt_pd(
+          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
+      _mm512_storeu_pd(v.cur + 4 * q, l);
+      const __m512d r = len_pair(v, q);
+      const __m512d e = _mm512_sub_pd(l, r);
+      const __m512d old = _mm512_loadu_pd(v.alive + 4 * q);
+      const __m512d w = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask(e, _mm512_mul_pd(vsc8, r), _CMP_LE_OQ), old);
+      broke8 |= _mm512_cmp_pd_mask(w, old, _CMP_NEQ_UQ);
+      _mm512_storeu_pd(v.alive + 4 * q, w);
+      const __m512d t = _mm512_mul_pd(_mm512_mul_pd(w, r), e);
+      const __m256d t0 = _mm512_castpd512_pd256(t), t1 = _mm512_extractf64x4_pd(t, 1);
+      acc = _mm256_add_pd(acc, t0);
+      add4(v.th + cj0, t0);
+      acc = _mm256_add_pd(acc, t1);
+      add4(v.th + cj1, t1);
+      q += 2;
+    }
+    add4(v.th + c, acc);
+  }
+  return broke8 != 0 || _mm256_movemask_pd(broke) != 0;
+}
+
+CRUMBLE_PD_AVX512 void force_avx512(const BoxView& v, std::int32_t k0, std::int32_t k1) {
+  const __m512d tiny = _mm512_set1_pd(1e-3);
+  for (std::int32_t k = k0; k < k1; ++k) {
+    const std::int64_t c = v.block_cell[k];
+    const Own4 o = own4(v, c);
+    const __m512d xi8 = twice(o.x), yi8 = twice(o.y), zi8 = twice(o.z), ati8 = twice(o.at), bi8 = twice(o.b);
+    __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
+    const std::int32_t q1 = v.block_group[k + 1];
+    std::int32_t q = v.block_group[k];
+    while (q < q1) {
+      if (q + 1 == q1 || !pairable(v, q)) {
+        force_group4(v, q, c, o, sx, sy, sz);
+        ++q;
+        continue;
+      }
+      const std::int64_t cj0 = c + v.delta[q], cj1 = c + v.delta[q + 1];
+      const __m512d dx = _mm512_sub_pd(load_pair(v.x, cj0, cj1), xi8);
+      const __m512d dy = _mm512_sub_pd(load_pair(v.y, cj0, cj1), yi8);
+      const __m512d dz = _mm512_sub_pd(load_pair(v.z, cj0, cj1), zi8);
+      const __m512d l = _mm512_loadu_pd(v.cur + 4 * q);
+      const __m512d r = len_pair(v, q);
+      const __m512d t = _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(ati8, load_pair(v.at, cj0, cj1)), r),
+                                      _mm512_mul_pd(_mm512_add_pd(bi8, load_pair(v.b, cj0, cj1)), _mm512_sub_pd(l, r)));
+      const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_loadu_pd(v.alive + 4 * q), t),
+                                      _mm512_max_pd(l, _mm512_mul_pd(tiny, r)));
+      const __m512d gx = _mm512_mul_pd(s, dx), gy = _mm512_mul_pd(s, dy), gz = _mm512_mul_pd(s, dz);
+      const __m256d gx0 = _mm512_castpd512_pd256(gx), gx1 = _mm512_extractf64x4_pd(gx, 1);
+      const __m256d gy0 = _mm512_castpd512_pd256(gy), gy1 = _mm512_extractf64x4_pd(gy, 1);
+      const __m256d gz0 = _mm512_castpd512_pd256(gz), gz1 = _mm512_extractf64x4_pd(gz, 1);
+      sx = _mm256_add_pd(sx, gx0);
+      sy = _mm256_add_pd(sy, gy0);
+      sz = _mm256_add_pd(sz, gz0);
+      _mm256_storeu_pd(v.fx + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj0), gx0));
+      _mm256_storeu_pd(v.fy + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj0), gy0));
+      _mm256_storeu_pd(v.fz + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj0), gz0));
+      sx = _mm256_add_pd(sx, gx1);
+      sy = _mm256_add_pd(sy, gy1);
+      sz = _mm256_add_pd(sz, gz1);
+      _mm256_storeu_pd(v.fx + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj1), gx1));
+      _mm256_storeu_pd(v.fy + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj1), gy1));
+      _mm256_storeu_pd(v.fz + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj1), gz1));
+      q += 2;
+    }
+    add4(v.fx + c, sx);
+    add4(v.fy + c, sy);
+    add4(v.fz + c, sz);
+  }
+}
+
+#pragma GCC diagnostic pop
 
 bool cpu_has_avx2() {
   static const bool ok = __builtin_cpu_supports("avx2");
   return ok;
 }
+bool cpu_has_avx512() {
+  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                         __builtin_cpu_supports("avx512vl") && cpu_has_avx2();
+  return ok;
+}
 #else
 bool cpu_has_avx2() { return false; }
+bool cpu_has_avx512() { return false; }
 #endif
 
-enum Isa : int { kGeneric = 0, kAvx2 = 1 };
+enum Isa : int { kGeneric = 0, kAvx2 = 1, kAvx512 = 2 };
+// AVX2 where the CPU has it, also when it has AVX-512: on the one AVX-512 CPU measured (AMD
+// Zen 5, docs/performance.md) the AVX-512 version was 2-3 % slower on one thread and 13 % on
+// two. The kernel is bound by its 4-cell loads and stores, not by arithmetic; the AVX-512
+// version runs when select_isa("avx512") asks for it (`crumble bench pd-kernel` times it).
 int best_isa() { return cpu_has_avx2() ? kAvx2 : kGeneric; }
 // -1: the best this CPU has; else the version select_isa() chose.
 std::atomic<int> g_selected{-1};
@@ -175,20 +320,28 @@ int current_isa() {
   const int s = g_selected.load(std::memory_order_relaxed);
   return s >= 0 ? s : best_isa();
 }
-const char* isa_name(int k) { return k == kAvx2 ? "avx2" : "generic"; }
+const char* isa_name(int k) { return k == kAvx512 ? "avx512" : k == kAvx2 ? "avx2" : "generic"; }
 
 }  // namespace
 
 bool dilatation(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc) {
 #ifdef CRUMBLE_PD_HAVE_AVX2
-  if (current_isa() == kAvx2) return dilatation_avx2(v, k0, k1, sc);
+  switch (current_isa()) {
+    case kAvx512: return dilatation_avx512(v, k0, k1, sc);
+    case kAvx2: return dilatation_avx2(v, k0, k1, sc);
+    default: break;
+  }
 #endif
   return dilatation_portable(v, k0, k1, sc);
 }
 
 void force(const BoxView& v, std::int32_t k0, std::int32_t k1) {
 #ifdef CRUMBLE_PD_HAVE_AVX2
-  if (current_isa() == kAvx2) return force_avx2(v, k0, k1);
+  switch (current_isa()) {
+    case kAvx512: return force_avx512(v, k0, k1);
+    case kAvx2: return force_avx2(v, k0, k1);
+    default: break;
+  }
 #endif
   force_portable(v, k0, k1);
 }
@@ -198,6 +351,7 @@ const char* isa() { return isa_name(current_isa()); }
 std::vector<std::string> available_isas() {
   std::vector<std::string> v{"generic"};
   if (cpu_has_avx2()) v.emplace_back("avx2");
+  if (cpu_has_avx512()) v.emplace_back("avx512");
   return v;
 }
 
@@ -206,7 +360,7 @@ void select_isa(const std::string& name) {
     g_selected.store(-1);
     return;
   }
-  for (int k : {kGeneric, kAvx2})
+  for (int k : {kGeneric, kAvx2, kAvx512})
     if (name == isa_name(k)) {
       const auto av = available_isas();
       if (std::find(av.begin(), av.end(), name) == av.end())
@@ -214,7 +368,7 @@ void select_isa(const std::string& name) {
       g_selected.store(k);
       return;
     }
-  throw std::invalid_argument("peridynamics kernel: unknown version '" + name + "' (known: generic, avx2)");
+  throw std::invalid_argument("peridynamics kernel: unknown version '" + name + "' (known: generic, avx2, avx512)");
 }
 
 // The linearised passes (CSR, full bond lists) sum each row in one fixed 8-lane order (bonds

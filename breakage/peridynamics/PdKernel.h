@@ -9,8 +9,9 @@
 // broken, 0 for a lane without a bond) and the current length. A block's 4 neighbours at one
 // offset are 4 consecutive cells, so one load fetches them with no gather or transpose;
 // each bond's length, stretch and force are computed once and added to both of its points.
-// Versions: AVX2 and portable, chosen at run time from the CPU; both do the same additions
-// in the same order into every cell, so they give bitwise the same results.
+// Versions: AVX2 and portable, chosen at run time from the CPU, and AVX-512 (two groups of a
+// block per 8-lane register) on request (it was not faster where measured); all do the same
+// additions in the same order into every cell, so they give bitwise the same results.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -61,8 +62,8 @@ void linear_force(std::int32_t i0, std::int32_t i1, const std::int32_t* off, con
                   const double* ux, const double* uy, const double* uz, const double* at, const double* b,
                   double* fx, double* fy, double* fz);
 
-// "avx2" or "generic": which version of dilatation/force runs (the best this CPU has,
-// unless select_isa() chose another). All versions give bitwise the same results.
+// "avx512", "avx2" or "generic": which version of dilatation/force runs (AVX2 when the CPU
+// has it, else generic, unless select_isa() chose another). All versions give bitwise the same results.
 const char* isa();
 // The versions this CPU can run ("generic" always).
 std::vector<std::string> available_isas();

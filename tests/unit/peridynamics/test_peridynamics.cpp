@@ -366,7 +366,10 @@ TEST(PeridynamicsKernel, VariantsAndThreadsAgree) {
       EXPECT_EQ(st.f, ref.f) << isa << " threads " << threads;
     }
   EXPECT_THROW(pd::kernel::select_isa("sse9"), std::invalid_argument);
-  EXPECT_THROW(pd::kernel::select_isa("avx512"), std::invalid_argument);
+  const auto av = pd::kernel::available_isas();
+  if (std::find(av.begin(), av.end(), "avx512") == av.end()) {  // a version this CPU cannot run
+    EXPECT_THROW(pd::kernel::select_isa("avx512"), std::invalid_argument);
+  }
   std::printf("kernel isa: %s\n", pd::kernel::isa());
 }
 
