@@ -149,7 +149,8 @@ CRUMBLE_PD_AVX2_INLINE Own4 own4(const BoxView& v, std::int64_t c) {
 
 CRUMBLE_PD_AVX2_INLINE void add4(double* p, __m256d s) { _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), s)); }
 
-__attribute__((target("avx2"))) bool dilatation_avx2(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc) {
+__attribute__((target("avx2"))) bool dilatation_avx2(const BoxView& view, std::int32_t k0, std::int32_t k1, double sc) {
+  const BoxView v = view;  // a local copy: the may-alias stores of the intrinsics would force reloads of view's pointers
   const __m256d vsc = _mm256_set1_pd(sc);
   __m256d broke = _mm256_setzero_pd();
   for (std::int32_t k = k0; k < k1; ++k) {
@@ -163,7 +164,8 @@ __attribute__((target("avx2"))) bool dilatation_avx2(const BoxView& v, std::int3
   return _mm256_movemask_pd(broke) != 0;
 }
 
-__attribute__((target("avx2"))) void force_avx2(const BoxView& v, std::int32_t k0, std::int32_t k1) {
+__attribute__((target("avx2"))) void force_avx2(const BoxView& view, std::int32_t k0, std::int32_t k1) {
+  const BoxView v = view;  // a local copy: the may-alias stores of the intrinsics would force reloads of view's pointers
   for (std::int32_t k = k0; k < k1; ++k) {
     const std::int64_t c = v.block_cell[k];
     const Own4 o = own4(v, c);
@@ -199,7 +201,8 @@ inline bool pairable(const BoxView& v, std::int32_t q) {
   return d >= 4 || d <= -4;
 }
 
-CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc) {
+CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& view, std::int32_t k0, std::int32_t k1, double sc) {
+  const BoxView v = view;  // a local copy: the may-alias stores of the intrinsics would force reloads of view's pointers
   const __m256d vsc = _mm256_set1_pd(sc);
   const __m512d vsc8 = _mm512_set1_pd(sc);
   __m256d broke = _mm256_setzero_pd();
@@ -243,7 +246,8 @@ CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& v, std::int32_t k0, std:
   return broke8 != 0 || _mm256_movemask_pd(broke) != 0;
 }
 
-CRUMBLE_PD_AVX512 void force_avx512(const BoxView& v, std::int32_t k0, std::int32_t k1) {
+CRUMBLE_PD_AVX512 void force_avx512(const BoxView& view, std::int32_t k0, std::int32_t k1) {
+  const BoxView v = view;  // a local copy: the may-alias stores of the intrinsics would force reloads of view's pointers
   const __m512d tiny = _mm512_set1_pd(1e-3);
   for (std::int32_t k = k0; k < k1; ++k) {
     const std::int64_t c = v.block_cell[k];
