@@ -96,6 +96,19 @@ namespace {
 // One group (4 lanes) of each pass, shared by the AVX2 and the AVX-512 versions.
 #define CRUMBLE_PD_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
 
+CRUMBLE_PD_AVX2_INLINE void add4(double* p, __m256d s) { _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), s)); }
+CRUMBLE_PD_AVX2_INLINE void sub4(double* p, __m256d s) { _mm256_storeu_pd(p, _mm256_sub_pd(_mm256_loadu_pd(p), s)); }
+// A bond's force g on the block's own sums (s += g) and on its neighbour cells (f −= g)
+CRUMBLE_PD_AVX2_INLINE void push_force(const BoxView& v, std::int64_t cj, __m256d gx, __m256d gy, __m256d gz, __m256d& sx,
+                                       __m256d& sy, __m256d& sz) {
+  sx = _mm256_add_pd(sx, gx);
+  sy = _mm256_add_pd(sy, gy);
+  sz = _mm256_add_pd(sz, gz);
+  sub4(v.fx + cj, gx);
+  sub4(v.fy + cj, gy);
+  sub4(v.fz + cj, gz);
+}
+
 CRUMBLE_PD_AVX2_INLINE void dilatation_group4(const BoxView& v, std::int32_t q, std::int64_t c, __m256d xi, __m256d yi,
                                               __m256d zi, __m256d vsc, __m256d& acc, __m256d& broke) {
   const std::int64_t cj = c + v.delta[q];
@@ -113,7 +126,7 @@ CRUMBLE_PD_AVX2_INLINE void dilatation_group4(const BoxView& v, std::int32_t q, 
   _mm256_storeu_pd(v.alive + 4 * q, w);
   const __m256d t = _mm256_mul_pd(_mm256_mul_pd(w, r), e);
   acc = _mm256_add_pd(acc, t);
-  _mm256_storeu_pd(v.th + cj, _mm256_add_pd(_mm256_loadu_pd(v.th + cj), t));
+  add4(v.th + cj, t);
 }
 
 struct Own4 {  // a block's own 4 points: position, aθ, b
@@ -133,13 +146,7 @@ CRUMBLE_PD_AVX2_INLINE void force_group4(const BoxView& v, std::int32_t q, std::
                                   _mm256_mul_pd(_mm256_add_pd(o.b, _mm256_loadu_pd(v.b + cj)), _mm256_sub_pd(l, r)));
   const __m256d s =
       _mm256_div_pd(_mm256_mul_pd(_mm256_loadu_pd(v.alive + 4 * q), t), _mm256_max_pd(l, _mm256_mul_pd(tiny, r)));
-  const __m256d gx = _mm256_mul_pd(s, dx), gy = _mm256_mul_pd(s, dy), gz = _mm256_mul_pd(s, dz);
-  sx = _mm256_add_pd(sx, gx);
-  sy = _mm256_add_pd(sy, gy);
-  sz = _mm256_add_pd(sz, gz);
-  _mm256_storeu_pd(v.fx + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj), gx));
-  _mm256_storeu_pd(v.fy + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj), gy));
-  _mm256_storeu_pd(v.fz + cj, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj), gz));
+  push_force(v, cj, _mm256_mul_pd(s, dx), _mm256_mul_pd(s, dy), _mm256_mul_pd(s, dz), sx, sy, sz);
 }
 
 CRUMBLE_PD_AVX2_INLINE Own4 own4(const BoxView& v, std::int64_t c) {
@@ -147,7 +154,6 @@ CRUMBLE_PD_AVX2_INLINE Own4 own4(const BoxView& v, std::int64_t c) {
           _mm256_loadu_pd(v.b + c)};
 }
 
-CRUMBLE_PD_AVX2_INLINE void add4(double* p, __m256d s) { _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), s)); }
 
 __attribute__((target("avx2"))) bool dilatation_avx2(const BoxView& view, std::int32_t k0, std::int32_t k1, double sc) {
   const BoxView v = view;  // a local copy: the may-alias stores of the intrinsics would force reloads of view's pointers
@@ -195,10 +201,22 @@ CRUMBLE_PD_AVX512 inline __m512d twice(__m256d x) { return _mm512_insertf64x4(_m
 CRUMBLE_PD_AVX512 inline __m512d len_pair(const BoxView& v, std::int32_t q) {
   return _mm512_insertf64x4(_mm512_set1_pd(v.len[q]), _mm256_set1_pd(v.len[q + 1]), 1);
 }
-// true when groups q and q + 1 can go together (their neighbour runs of 4 cells are disjoint)
-inline bool pairable(const BoxView& v, std::int32_t q) {
+// true when groups q and q + 1 (< q1) can go together: their neighbour runs of 4 cells are disjoint
+inline bool pairable(const BoxView& v, std::int32_t q, std::int32_t q1) {
+  if (q + 1 >= q1) return false;
   const std::int64_t d = v.delta[q + 1] - v.delta[q];
   return d >= 4 || d <= -4;
+}
+// The bond vectors Y of groups q (low half) and q + 1 (high half) from the block's points (twice)
+struct Pair8 {
+  std::int64_t cj0, cj1;
+  __m512d dx, dy, dz;
+};
+CRUMBLE_PD_AVX512 inline Pair8 bond_pair(const BoxView& v, std::int32_t q, std::int64_t c, __m512d xi8, __m512d yi8,
+                                         __m512d zi8) {
+  const std::int64_t cj0 = c + v.delta[q], cj1 = c + v.delta[q + 1];
+  return {cj0, cj1, _mm512_sub_pd(load_pair(v.x, cj0, cj1), xi8), _mm512_sub_pd(load_pair(v.y, cj0, cj1), yi8),
+          _mm512_sub_pd(load_pair(v.z, cj0, cj1), zi8)};
 }
 
 CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& view, std::int32_t k0, std::int32_t k1, double sc) {
@@ -212,18 +230,13 @@ CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& view, std::int32_t k0, s
     const __m256d xi = _mm256_loadu_pd(v.x + c), yi = _mm256_loadu_pd(v.y + c), zi = _mm256_loadu_pd(v.z + c);
     const __m512d xi8 = twice(xi), yi8 = twice(yi), zi8 = twice(zi);
     __m256d acc = _mm256_setzero_pd();
-    const std::int32_t q1 = v.block_group[k + 1];
-    std::int32_t q = v.block_group[k];
-    while (q < q1) {
-      if (q + 1 == q1 || !pairable(v, q)) {
+    for (std::int32_t q = v.block_group[k], q1 = v.block_group[k + 1]; q < q1; q += 2) {
+      if (!pairable(v, q, q1)) {
         dilatation_group4(v, q, c, xi, yi, zi, vsc, acc, broke);
-        ++q;
+        --q;  // one group, not two
         continue;
       }
-      const std::int64_t cj0 = c + v.delta[q], cj1 = c + v.delta[q + 1];
-      const __m512d dx = _mm512_sub_pd(load_pair(v.x, cj0, cj1), xi8);
-      const __m512d dy = _mm512_sub_pd(load_pair(v.y, cj0, cj1), yi8);
-      const __m512d dz = _mm512_sub_pd(load_pair(v.z, cj0, cj1), zi8);
+      const auto [cj0, cj1, dx, dy, dz] = bond_pair(v, q, c, xi8, yi8, zi8);
       const __m512d l = _mm512_sqrt_pd(
           _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz)));
       _mm512_storeu_pd(v.cur + 4 * q, l);
@@ -239,7 +252,6 @@ CRUMBLE_PD_AVX512 bool dilatation_avx512(const BoxView& view, std::int32_t k0, s
       add4(v.th + cj0, t0);
       acc = _mm256_add_pd(acc, t1);
       add4(v.th + cj1, t1);
-      q += 2;
     }
     add4(v.th + c, acc);
   }
@@ -254,18 +266,13 @@ CRUMBLE_PD_AVX512 void force_avx512(const BoxView& view, std::int32_t k0, std::i
     const Own4 o = own4(v, c);
     const __m512d xi8 = twice(o.x), yi8 = twice(o.y), zi8 = twice(o.z), ati8 = twice(o.at), bi8 = twice(o.b);
     __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
-    const std::int32_t q1 = v.block_group[k + 1];
-    std::int32_t q = v.block_group[k];
-    while (q < q1) {
-      if (q + 1 == q1 || !pairable(v, q)) {
+    for (std::int32_t q = v.block_group[k], q1 = v.block_group[k + 1]; q < q1; q += 2) {
+      if (!pairable(v, q, q1)) {
         force_group4(v, q, c, o, sx, sy, sz);
-        ++q;
+        --q;  // one group, not two
         continue;
       }
-      const std::int64_t cj0 = c + v.delta[q], cj1 = c + v.delta[q + 1];
-      const __m512d dx = _mm512_sub_pd(load_pair(v.x, cj0, cj1), xi8);
-      const __m512d dy = _mm512_sub_pd(load_pair(v.y, cj0, cj1), yi8);
-      const __m512d dz = _mm512_sub_pd(load_pair(v.z, cj0, cj1), zi8);
+      const auto [cj0, cj1, dx, dy, dz] = bond_pair(v, q, c, xi8, yi8, zi8);
       const __m512d l = _mm512_loadu_pd(v.cur + 4 * q);
       const __m512d r = len_pair(v, q);
       const __m512d t = _mm512_add_pd(_mm512_mul_pd(_mm512_add_pd(ati8, load_pair(v.at, cj0, cj1)), r),
@@ -273,22 +280,9 @@ CRUMBLE_PD_AVX512 void force_avx512(const BoxView& view, std::int32_t k0, std::i
       const __m512d s = _mm512_div_pd(_mm512_mul_pd(_mm512_loadu_pd(v.alive + 4 * q), t),
                                       _mm512_max_pd(l, _mm512_mul_pd(tiny, r)));
       const __m512d gx = _mm512_mul_pd(s, dx), gy = _mm512_mul_pd(s, dy), gz = _mm512_mul_pd(s, dz);
-      const __m256d gx0 = _mm512_castpd512_pd256(gx), gx1 = _mm512_extractf64x4_pd(gx, 1);
-      const __m256d gy0 = _mm512_castpd512_pd256(gy), gy1 = _mm512_extractf64x4_pd(gy, 1);
-      const __m256d gz0 = _mm512_castpd512_pd256(gz), gz1 = _mm512_extractf64x4_pd(gz, 1);
-      sx = _mm256_add_pd(sx, gx0);
-      sy = _mm256_add_pd(sy, gy0);
-      sz = _mm256_add_pd(sz, gz0);
-      _mm256_storeu_pd(v.fx + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj0), gx0));
-      _mm256_storeu_pd(v.fy + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj0), gy0));
-      _mm256_storeu_pd(v.fz + cj0, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj0), gz0));
-      sx = _mm256_add_pd(sx, gx1);
-      sy = _mm256_add_pd(sy, gy1);
-      sz = _mm256_add_pd(sz, gz1);
-      _mm256_storeu_pd(v.fx + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fx + cj1), gx1));
-      _mm256_storeu_pd(v.fy + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fy + cj1), gy1));
-      _mm256_storeu_pd(v.fz + cj1, _mm256_sub_pd(_mm256_loadu_pd(v.fz + cj1), gz1));
-      q += 2;
+      push_force(v, cj0, _mm512_castpd512_pd256(gx), _mm512_castpd512_pd256(gy), _mm512_castpd512_pd256(gz), sx, sy, sz);
+      push_force(v, cj1, _mm512_extractf64x4_pd(gx, 1), _mm512_extractf64x4_pd(gy, 1), _mm512_extractf64x4_pd(gz, 1), sx,
+                 sy, sz);
     }
     add4(v.fx + c, sx);
     add4(v.fy + c, sy);
