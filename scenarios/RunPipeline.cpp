@@ -138,12 +138,28 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 // Keys that may differ between a run and its resumption: the thread count (results do not
 // depend on it), simulation.max_steps (raising it is how a run stopped by it continues),
 // the wall-time checkpoint interval, and what a physical guard's message advises after a
-// stop: the time step schedule and the guards themselves (they only check the state; a
-// smaller step from the last checkpoint on is how a stopped run goes on).
-const std::set<std::string> kResumeMayDiffer = {"/threads", "/simulation/max_steps", "/output/checkpoint_every_s",
-                                                "/time_step", "/simulation/guards"};
+// stop: the time step schedule, the contact solver's iterations and the guards themselves
+// (they only check the state; a smaller step or a better converged contact solution from the
+// last checkpoint on is how a stopped run goes on).
+const std::set<std::string> kResumeMayDiffer = {"/threads",   "/simulation/max_steps",     "/output/checkpoint_every_s",
+                                                "/time_step", "/engine/solver_iterations", "/simulation/guards"};
 
-void check_resumable(const std::string& out, const Json& effective) {
+// The keys of kResumeMayDiffer whose value differs between the run's effective scenario and the
+// resuming one, as [{"path", "was", "now"}] (absent values are null).
+Json resume_changes(const Json& before, const Json& effective) {
+  Json changes = Json::array();
+  for (const std::string& key : kResumeMayDiffer) {
+    const Json::json_pointer ptr(key);
+    const Json was = before.contains(ptr) ? before.at(ptr) : Json();
+    const Json now = effective.contains(ptr) ? effective.at(ptr) : Json();
+    if (was != now) changes.push_back(Json{{"path", key}, {"was", was}, {"now", now}});
+  }
+  return changes;
+}
+
+// Refuses a resume whose effective scenario differs from the run's but for kResumeMayDiffer;
+// returns the allowed changes (resume_changes).
+Json check_resumable(const std::string& out, const Json& effective) {
   const fs::path dir(out);
   if (!fs::exists(dir / "checkpoint.json"))
     throw InputError("--out " + out + " --resume: no checkpoint.json to resume from (a run writes one when "
@@ -163,7 +179,7 @@ void check_resumable(const std::string& out, const Json& effective) {
   } catch (const std::exception&) {
   }
   const std::string d = first_difference(before, effective, "", kResumeMayDiffer);
-  if (d.empty()) return;
+  if (d.empty()) return resume_changes(before, effective);
   auto show = [&](const Json& j) {
     try {
       const Json::json_pointer ptr(d == "/" ? "" : d);
@@ -175,7 +191,8 @@ void check_resumable(const std::string& out, const Json& effective) {
   throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
                    ", now " + show(effective) +
                    "); a resumed run must use the same effective scenario (only /threads, "
-                   "/simulation/max_steps, /output/checkpoint_every_s, /time_step and /simulation/guards may change). Use the same file and --set options, or start a new run "
+                   "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations and /simulation/guards "
+                   "may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 
@@ -233,9 +250,17 @@ RunResult execute(const RunRequest& req) {
   if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
   if (req.resume && req.packing_only) throw InputError("--resume: a packing stage has nothing to resume");
   double settle_before = -1;
+  Json changed_on_resume = Json::array();
   if (req.resume) {
-    check_resumable(out, sc.effective);
+    changed_on_resume = check_resumable(out, sc.effective);
     settle_before = previous_settle_steps(out);
+    // From here on the run goes on with these settings: effective_scenario.json says so, and
+    // summary.json's resume_changes keeps what they were before.
+    for (const Json& c : changed_on_resume)
+      std::cerr << "crumble: note: resuming with " << c["path"].get<std::string>() << " " << c["now"].dump()
+                << " (was " << c["was"].dump() << ")\n";
+    if (!changed_on_resume.empty())
+      write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
   } else {
     prepare_fresh_out(out, req.force);
   }
@@ -302,6 +327,7 @@ RunResult execute(const RunRequest& req) {
     j["packing_settle_steps"] = static_cast<double>(settle_steps);
     j["packing_settled"] = packing_settled ? 1.0 : 0.0;
     j["packing_hash"] = packing_hash;
+  if (!changed_on_resume.empty()) j["resume_changes"] = changed_on_resume;
     j["representations_built"] = representations_json(representations_built() - built_before);
     j["wall_seconds"] = seconds_since(t0);
     write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
@@ -343,6 +369,7 @@ RunResult execute(const RunRequest& req) {
   sum.wall_seconds = seconds_since(t0);
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
+  if (!changed_on_resume.empty()) j["resume_changes"] = changed_on_resume;
   if (const AnalysisExecutor* ex = sim.analysis_executor()) {
     j["analysis_ranks"] = ex->ranks();
     Json n = Json::array(), t = Json::array();

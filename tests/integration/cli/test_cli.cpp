@@ -234,14 +234,30 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   EXPECT_NE(series.find("\n0.008,100,"), std::string::npos);
   EXPECT_NE(series.find("\n0.02,250,"), std::string::npos);
   EXPECT_EQ(series.find(",100,", series.find(",100,") + 1), std::string::npos);
-  // What a guard's message advises — a smaller time step, other guard limits — may change on
-  // a resume; the run goes on from its checkpoint (at step 125, t = 0.01 s), at 4e-5 s per
-  // step to the end of the 0.02 s ramp: 125 + 250 steps.
+  // What a guard's message advises — a smaller time step, more solver iterations, other guard
+  // limits — may change on a resume; the run goes on from its checkpoint (at step 125,
+  // t = 0.01 s), at 4e-5 s per step to the end of the 0.02 s ramp: 125 + 250 steps.
   const Result g = run("run " + scen + " --out " + c.string() + sets +
-                       " --set output.checkpoint_every=50 --set time_step=4e-5"
+                       " --set output.checkpoint_every=50 --set time_step=4e-5 --set engine.solver_iterations=600"
                        " --set simulation.guards.max_overlap_fraction=0.6 --resume");
   ASSERT_EQ(g.status, 0) << g.output;
   EXPECT_NEAR(nlohmann::json::parse(slurp(c / "summary.json"))["steps"].get<double>(), 375, 2);
+  // The folder's effective scenario now holds what the run went on with, and summary.json
+  // what changed at the resume.
+  EXPECT_EQ(nlohmann::json::parse(slurp(c / "effective_scenario.json"))["engine"]["solver_iterations"], 600);
+  const auto changes = nlohmann::json::parse(slurp(c / "summary.json"))["resume_changes"];
+  ASSERT_TRUE(changes.is_array()) << changes;
+  bool iterations_named = false;
+  for (const auto& ch : changes)
+    if (ch["path"] == "/engine/solver_iterations") {
+      iterations_named = true;
+      EXPECT_EQ(ch["was"], 300);
+      EXPECT_EQ(ch["now"], 600);
+    }
+  EXPECT_TRUE(iterations_named) << changes;
+  EXPECT_NE(g.output.find("resuming with /engine/solver_iterations 600 (was 300)"), std::string::npos) << g.output;
+  // The first resume only lifted the step limit that stopped the run.
+  EXPECT_EQ(sb["resume_changes"], nlohmann::json::parse(R"([{"path": "/simulation/max_steps", "was": 125, "now": 0}])"));
   // Resuming a scenario that never wrote a checkpoint is an input error.
   expect_input_error("run " + scen + " --out " + (base / "nothing_here").string() + sets + " --resume",
                      "output.checkpoint_every");
