@@ -82,6 +82,7 @@ StagesWriter::Mark StagesWriter::mark(const Simulation& sim, const RunState& s) 
 
 void StagesWriter::on_start(const Simulation& sim, const RunState& s) {
   start_ = mark(sim, s);
+  timed_from_step_ = s.step;
   from_ = 0;
   level_ = 0;
   if (resumed_) {
@@ -121,11 +122,13 @@ void StagesWriter::write_row(const Simulation& sim, const RunState& s, double to
   wall_total_ += wall;
   const long steps = now.step - start_.step, analyses = now.analyses_total - start_.analyses_total;
   const double engine = now.engine - start_.engine;
+  // A resumed stage's engine time covers only the steps since the resume.
+  const long timed_steps = now.step - timed_from_step_;
   auto& o = csv_.row();
   o << from_ << ',' << to << ',' << (complete ? 1 : 0) << ',' << (stage_resumed_ ? 1 : 0) << ',' << s.step
     << ',' << s.time << ',' << start_.grains << ',' << s.grains << ',' << wall << ',' << wall_total_ << ',' << steps << ','
     << engine << ',';
-  if (steps > 0) o << 1e3 * engine / steps;
+  if (timed_steps > 0) o << 1e3 * engine / timed_steps;
   o << ',' << analyses << ',' << now.events_total - start_.events_total << ',' << now.analyses - start_.analyses << ',';
   if (analyses_seen_ > 0) o << analysis_ms_ / analyses_seen_;
   o << ',';
@@ -133,6 +136,7 @@ void StagesWriter::write_row(const Simulation& sim, const RunState& s, double to
   o << ',' << now.fragments - start_.fragments << ',' << now.analyses_total << ',' << now.events_total << '\n';
   o.flush();
   start_ = now;
+  timed_from_step_ = now.step;
   analysis_ms_ = breaking_ms_ = 0;
   analyses_seen_ = 0;
   stage_resumed_ = false;

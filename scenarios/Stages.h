@@ -62,6 +62,7 @@ class StagesWriter : public Observer {
   Mark start_;
   double analysis_ms_ = 0, breaking_ms_ = 0;  // per-analysis wall times summed (all threads)
   long analyses_seen_ = 0;                    // analyses this process saw in the stage
+  long timed_from_step_ = 0;                  // first step of the stage this process timed
 };
 
 // The table of DIR/stages.csv with the fits and the extrapolation to `target` in the table's

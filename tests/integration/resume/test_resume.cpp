@@ -151,6 +151,31 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     EXPECT_EQ(na, sa["analyses"].get<long>());
     EXPECT_EQ(ne, sa["breakage_events"].get<long>());
   }
+  {
+    // The stage the resume fell into: its engine time is this process's, so its time per step
+    // is over the steps since the resume, not since the stage began.
+    const auto rows = crumble::read_csv((killed / "stages.csv").string());
+    ASSERT_GE(rows.size(), 2u);
+    auto col = [&](const std::string& n) {
+      for (std::size_t c = 0; c < rows[0].size(); ++c)
+        if (rows[0][c] == n) return c;
+      ADD_FAILURE() << "stages.csv has no column " << n;
+      return std::size_t{0};
+    };
+    const std::size_t c_step = col("step"), c_steps = col("steps"), c_engine = col("engine_s"),
+                      c_per = col("engine_ms_per_step");
+    const long resumed_at = sb["resumed_from_step"].get<long>();
+    bool seen = false;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      const long end = std::stol(rows[i][c_step]), begin = end - std::stol(rows[i][c_steps]);
+      if (!(begin < resumed_at && resumed_at < end)) continue;
+      seen = true;
+      EXPECT_NEAR(std::stod(rows[i][c_per]), 1e3 * std::stod(rows[i][c_engine]) / (end - resumed_at),
+                  1e-6 * std::stod(rows[i][c_per]))
+          << "stage ending at step " << end << ", resumed at " << resumed_at;
+    }
+    if (!seen) std::cerr << "(the resume fell on a stage boundary: no stage to check)\n";
+  }
   // summary.json: equal but for wall times, the resume marker and the representation counts
   // (a cost of the process: a resumed run counts what it rebuilt from the checkpoint).
   nlohmann::json ja = sa, jb = sb;
