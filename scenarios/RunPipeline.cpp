@@ -138,11 +138,13 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 // Keys that may differ between a run and its resumption: the thread count (results do not
 // depend on it), simulation.max_steps (raising it is how a run stopped by it continues),
 // the wall-time checkpoint interval, and what a physical guard's message advises after a
-// stop: the time step schedule, the contact solver's iterations and the guards themselves
+// stop: the time step schedule, the contact solver's convergence settings (iterations, Bullet's
+// tolerance and residual) and the guards themselves
 // (they only check the state; a smaller step or a better converged contact solution from the
 // last checkpoint on is how a stopped run goes on).
-const std::set<std::string> kResumeMayDiffer = {"/threads",   "/simulation/max_steps",     "/output/checkpoint_every_s",
-                                                "/time_step", "/engine/solver_iterations", "/simulation/guards"};
+const std::set<std::string> kResumeMayDiffer = {
+    "/threads",         "/simulation/max_steps",   "/output/checkpoint_every_s", "/time_step",
+    "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/simulation/guards"};
 
 // The keys of kResumeMayDiffer whose value differs between the run's effective scenario and the
 // resuming one, as [{"path", "was", "now"}] (absent values are null).
@@ -191,8 +193,8 @@ Json check_resumable(const std::string& out, const Json& effective) {
   throw InputError("--resume: the scenario differs from the run in " + out + " at " + d + " (was " + show(before) +
                    ", now " + show(effective) +
                    "); a resumed run must use the same effective scenario (only /threads, "
-                   "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations and /simulation/guards "
-                   "may change). Use the same file and --set options, or start a new run "
+                   "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations, "
+                   "/engine/solver_tolerance, /engine/solver_residual and /simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 
