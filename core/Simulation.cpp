@@ -98,6 +98,7 @@ SimulationState Simulation::saved_state() const {
   s.next_id = next_id_;
   s.schedule_last_stress = schedule_.last_stress();
   s.max_platen_stress = max_platen_stress_;
+  s.platen_stress = state().platen_stress;
   s.energy_in = energy_in_;
   s.reference_diameter = reference_diameter_;
   s.small_grain_overlaps = guard_max_.small_grain_overlaps;
@@ -283,7 +284,10 @@ RunSummary Simulation::run(const Progress& progress) {
       sum.interrupted = true;
       break;
     }
-    double dt = time_step(std::max(st.platen_stress, 0.0));
+    // The first step after a resume: the stress at the checkpoint, which an engine that does
+    // not keep its contact forces (Bullet) cannot measure yet.
+    const bool first_resumed = resumed_ && step_ == resumed_from_.step && resumed_from_.platen_stress >= 0;
+    double dt = time_step(std::max(first_resumed ? resumed_from_.platen_stress : st.platen_stress, 0.0));
     const double bound = engine_->max_stable_dt();
     if (dt > bound) {
       if (!settings_.auto_reduce_dt)

@@ -52,6 +52,10 @@ struct SimulationState {
   double schedule_last_stress = 0;
   std::size_t grains_initial = 0;
   double mass_initial = 0, void_ratio_initial = 0, max_platen_stress = 0;
+  // Pa at the checkpoint's step: a resumed run picks its first step's time step by it (an
+  // engine without contact history, as Bullet, measures no platen force before that step).
+  // Negative: unknown (older checkpoints).
+  double platen_stress = -1;
   double energy_in = 0;  // J: platen work and initial kinetic energy so far (guards)
   double reference_diameter = 0;  // m: mean diameter of the initial grains (guards)
   long small_grain_overlaps = 0;

@@ -130,6 +130,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"mass_initial", st.mass_initial},
                 {"void_ratio_initial", st.void_ratio_initial},
                 {"max_platen_stress", st.max_platen_stress},
+                {"platen_stress", st.platen_stress},
                 {"guard_max_overlap_fraction", st.guard_max_overlap_fraction},
                 {"guard_max_energy_ratio", st.guard_max_energy_ratio}};
   // Shared shapes are written once.
@@ -206,6 +207,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.mass_initial = s.number("mass_initial", 0, 0);
   st.void_ratio_initial = s.number("void_ratio_initial", 0);
   st.max_platen_stress = s.number("max_platen_stress", 0);
+  st.platen_stress = s.number("platen_stress", -1);
   st.guard_max_overlap_fraction = s.number("guard_max_overlap_fraction", 0, 0);
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   std::vector<Shape::Ptr> shapes;

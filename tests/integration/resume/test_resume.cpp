@@ -216,8 +216,11 @@ TEST(Resume, BulletRunResumedAfterSigkillStaysWithinTolerance) {
       " --quiet --threads 1 --set packing.count=40 --set container.lx=5e-3 --set container.ly=5e-3"
       " --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=4e6"
       " --set fragments.type=alpha_shape --set loading.max_stress=3e6 --set loading.ramp_time=0.02"
-      " --set engine.solver_iterations=100 --set simulation.sample_every=25"
-      " --set output.checkpoint_every=100 --set output.checkpoint_every_s=0";
+      " --set engine.solver_iterations=100 --set simulation.sample_every=1"
+      " --set output.checkpoint_every=100 --set output.checkpoint_every_s=0"
+      // A time step by stress level (as Zhu & Zhao 2019 §5), 6e-5 s from 0.1 MPa on: reached
+      // well before the first checkpoint.
+      " --set 'time_step=[{\"below_stress\":1e5,\"dt\":8e-5},{\"below_stress\":1e300,\"dt\":6e-5}]'";
   const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
   ASSERT_EQ(a.status, 0) << a.output;
   const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
@@ -241,6 +244,23 @@ TEST(Resume, BulletRunResumedAfterSigkillStaysWithinTolerance) {
   EXPECT_EQ(data_rows(slurp(killed / "events.csv")), sb["analyses"].get<long>());
   EXPECT_EQ(data_rows(slurp(killed / "series.csv")), data_rows(slurp(whole / "series.csv")));
   EXPECT_FALSE(nlohmann::json::parse(slurp(killed / "checkpoint.json")).contains("engine_state"));
+  // Bullet keeps no contact forces in the checkpoint: the first step after the resume still
+  // takes the time step of the checkpoint's stress, not that of zero stress.
+  const auto rows = crumble::read_csv((killed / "series.csv").string());
+  ASSERT_GE(rows.size(), 2u);
+  std::size_t c_step = 0, c_dt = 0;
+  for (std::size_t c = 0; c < rows[0].size(); ++c) {
+    if (rows[0][c] == "step") c_step = c;
+    if (rows[0][c] == "dt_s") c_dt = c;
+  }
+  ASSERT_GT(c_dt, 0u);
+  long after = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (std::stol(rows[i][c_step]) > sb["resumed_from_step"].get<long>()) {
+      ++after;
+      EXPECT_DOUBLE_EQ(std::stod(rows[i][c_dt]), 6e-5) << "step " << rows[i][c_step];
+    }
+  EXPECT_GT(after, 0);
 }
 
 // A checkpoint whose engine state does not fit the grains is refused with the JSON path.
