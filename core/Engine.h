@@ -95,6 +95,17 @@ class Engine {
   // Total force (N; 2D: N/m) the grains exert on the wall.
   virtual Vec3 moving_wall_force(int index) const;
 
+  // The contact solver's convergence in the last step, for an engine with an iterative one
+  // (Bullet's projected Gauss-Seidel): the most iterations an island used, and whether one
+  // stopped at the iteration limit with its tolerance unmet (`change`: its relative impulse
+  // change in the last iteration). iterations < 0: no iterative solver, or no contact yet.
+  struct SolverReport {
+    int iterations = -1;
+    bool limit_before_tolerance = false;
+    double change = 0;
+  };
+  virtual SolverReport solver_report() const { return {}; }
+
   // Checkpoints (scenarios/Checkpoint.h): the engine's own state beyond what the grain
   // records carry (contact history, velocities at half steps, exact orientations, the
   // platen's motion and the forces last measured), so that a resumed run continues the

@@ -305,6 +305,14 @@ RunSummary Simulation::run(const Progress& progress) {
     drive_walls(time_, dt);
     engine_->step(dt);
     timings_.engine += seconds_since(t0);
+    if (const Engine::SolverReport r = engine_->solver_report(); r.iterations >= 0) {
+      ++solver_.steps;
+      solver_.iterations_max = std::max(solver_.iterations_max, r.iterations);
+      if (r.limit_before_tolerance) {
+        ++solver_.limited;
+        solver_.limited_change_max = std::max(solver_.limited_change_max, r.change);
+      }
+    }
     time_ += dt;
     ++step_;
     st = state();
@@ -368,6 +376,19 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
   sum.extra["guard_small_grains_removed"] = static_cast<double>(guard_max_.small_grains_removed);
+  if (solver_.steps > 0) {
+    const double limited = static_cast<double>(solver_.limited) / static_cast<double>(solver_.steps);
+    sum.extra["engine_solver_iterations_max"] = solver_.iterations_max;
+    sum.extra["engine_solver_limited_fraction"] = limited;
+    sum.extra["engine_solver_limited_change_max"] = solver_.limited_change_max;
+    // Unconverged contact forces change the result (docs/validation.md, Zhu & Zhao §5): say so.
+    if (limited >= 0.1)
+      std::cerr << "crumble: note: the contact solver stopped at its iteration limit (" << solver_.iterations_max
+                << ") before its tolerance in " << std::lround(100 * limited)
+                << " % of the loading steps (relative impulse change left: up to " << solver_.limited_change_max
+                << "); its contact forces are less converged than engine.solver_tolerance asks: raise engine.solver_iterations for converged forces (counted in "
+                   "summary.json: engine_solver_limited_fraction)\n";
+  }
   auto t0 = Clock::now();
   for (auto& o : observers_) o->on_finish(*this, st, sum);
   timings_.observers += seconds_since(t0);

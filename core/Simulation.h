@@ -174,6 +174,12 @@ class Simulation {
   double energy_in_ = 0;
   double reference_diameter_ = 0;
   GuardReading guard_max_;
+  // The engine's contact solver over this process's loading steps (Engine::solver_report).
+  struct SolverTally {
+    long steps = 0, limited = 0;  // steps reported; of them stopped at the limit, tolerance unmet
+    int iterations_max = -1;
+    double limited_change_max = 0;
+  } solver_;
   void remove_escaped(const std::vector<GrainId>& ids);
   std::vector<MovingWall> walls_;
   std::vector<double> wall_radius_;  // bounding radius of each wall's shape

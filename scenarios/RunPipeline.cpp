@@ -146,15 +146,28 @@ const std::set<std::string> kResumeMayDiffer = {
     "/threads",         "/simulation/max_steps",   "/output/checkpoint_every_s", "/time_step",
     "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/simulation/guards"};
 
-// The keys of kResumeMayDiffer whose value differs between the run's effective scenario and the
-// resuming one, as [{"path", "was", "now"}] (absent values are null).
+// Appends {"path", "was", "now"} for every leaf (or whole value, where the types differ) in
+// which `was` and `now` differ below `path`.
+void leaf_changes(const Json& was, const Json& now, const std::string& path, Json& out) {
+  if (was.is_object() && now.is_object()) {
+    std::set<std::string> keys;
+    for (const auto& [k, v] : was.items()) keys.insert(k);
+    for (const auto& [k, v] : now.items()) keys.insert(k);
+    for (const std::string& k : keys)
+      leaf_changes(was.contains(k) ? was.at(k) : Json(), now.contains(k) ? now.at(k) : Json(), path + "/" + k, out);
+    return;
+  }
+  if (was != now) out.push_back(Json{{"path", path}, {"was", was}, {"now", now}});
+}
+
+// Where the keys of kResumeMayDiffer differ between the run's effective scenario and the
+// resuming one, leaf by leaf, as [{"path", "was", "now"}] (absent values are null).
 Json resume_changes(const Json& before, const Json& effective) {
   Json changes = Json::array();
   for (const std::string& key : kResumeMayDiffer) {
     const Json::json_pointer ptr(key);
-    const Json was = before.contains(ptr) ? before.at(ptr) : Json();
-    const Json now = effective.contains(ptr) ? effective.at(ptr) : Json();
-    if (was != now) changes.push_back(Json{{"path", key}, {"was", was}, {"now", now}});
+    leaf_changes(before.contains(ptr) ? before.at(ptr) : Json(), effective.contains(ptr) ? effective.at(ptr) : Json(),
+                 key, changes);
   }
   return changes;
 }

@@ -787,6 +787,15 @@ double BulletEngine::wall_force(int wall) const {
 }
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
+Engine::SolverReport BulletEngine::solver_report() const {
+  const ToleranceSolver& s = *impl_->solver;
+  SolverReport r;
+  r.iterations = s.max_iterations > 0 ? s.max_iterations : -1;
+  r.change = s.max_change;
+  r.limit_before_tolerance =
+      s.tolerance > 0 && s.max_iterations >= impl_->world->getSolverInfo().m_numIterations && s.max_change > s.tolerance;
+  return r;
+}
 
 double BulletEngine::length_scale() const { return impl_->scale; }
 

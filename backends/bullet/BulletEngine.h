@@ -86,6 +86,7 @@ class BulletEngine final : public Engine {
   double platen_force() const override;
   double floor_force() const override;
   double wall_force(int wall) const override;
+  SolverReport solver_report() const override;
 
   // Diagnostics.
   double length_scale() const;             // internal units per metre (0 until fixed)

@@ -201,3 +201,34 @@ TEST(BulletEngine, RollingFrictionIsALeverArmInTheInternalUnit) {
   EXPECT_NEAR(s.velocity.x, 0.0, 1e-4);
 }
 
+
+// The solver report (Engine::solver_report): a column of five spheres on the floor needs many
+// projected Gauss-Seidel sweeps to pass its weight down. Two sweeps stop at the limit with the
+// tolerance unmet; 2000 sweeps reach a loose tolerance before the limit. No contact: no report.
+TEST(BulletEngine, SolverReportSaysWhenTheIterationLimitCameFirst) {
+  auto column = [](int iterations, double tolerance) {
+    auto e = make_engine({{"solver_iterations", iterations}, {"solver_tolerance", tolerance}});
+    e->set_container({4e-3, 4e-3, 20e-3, 0});
+    const auto s = Shape::sphere(1e-3);
+    for (int i = 0; i < 5; ++i) e->add_grain(grain(i, s, {2e-3, 2e-3, 1e-3 + 2e-3 * i}));
+    run(*e, 200);
+    return e->solver_report();
+  };
+  const Engine::SolverReport few = column(2, 1e-9);
+  EXPECT_EQ(few.iterations, 2);
+  EXPECT_TRUE(few.limit_before_tolerance);
+  EXPECT_GT(few.change, 1e-9);
+  const Engine::SolverReport many = column(2000, 1e-3);
+  EXPECT_GT(many.iterations, 2);
+  EXPECT_LT(many.iterations, 2000);
+  EXPECT_FALSE(many.limit_before_tolerance);
+  // Without a tolerance every step runs all its sweeps, by request: not reported as limited.
+  const Engine::SolverReport fixed = column(50, 0);
+  EXPECT_EQ(fixed.iterations, 50);
+  EXPECT_FALSE(fixed.limit_before_tolerance);
+  auto empty = make_engine();
+  empty->set_container({4e-3, 4e-3, 4e-3, 0});
+  empty->add_grain(grain(0, Shape::sphere(1e-3), {2e-3, 2e-3, 2e-3}));
+  run(*empty, 2);
+  EXPECT_LT(empty->solver_report().iterations, 0);
+}
