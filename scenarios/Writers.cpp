@@ -94,6 +94,7 @@ CsvStream::CsvStream(std::string path, const std::string& header, long keep_unti
     std::string line;
     int col = -1;
     bool first = true;
+    std::ptrdiff_t commas = 0;
     while (std::getline(in, line)) {
       std::stringstream ss(line);
       std::string cell;
@@ -102,13 +103,17 @@ CsvStream::CsvStream(std::string path, const std::string& header, long keep_unti
         for (int k = 0; std::getline(ss, cell, ','); ++k)
           if (cell == "step") col = k;
         if (col < 0) throw std::runtime_error("cannot resume '" + from + "': it has no step column");
+        commas = std::count(line.begin(), line.end(), ',');
         continue;
       }
+      // A run killed while writing leaves a cut last row: a row is kept only whole (as many
+      // fields as the header) and with a whole step number at or before the resume point.
+      if (std::count(line.begin(), line.end(), ',') != commas) continue;
       for (int k = 0; k <= col && std::getline(ss, cell, ','); ++k) {
       }
       char* end = nullptr;
       const long v = std::strtol(cell.c_str(), &end, 10);
-      if (end != cell.c_str() && v <= keep_until_step) kept += line + "\n";
+      if (end != cell.c_str() && *end == '\0' && v <= keep_until_step) kept += line + "\n";
     }
   }
   out_.open(path_ + ".part", std::ios::trunc);

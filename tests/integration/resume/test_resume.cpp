@@ -75,6 +75,14 @@ std::string without_columns(const std::string& csv, const std::set<std::string>&
   return out;
 }
 
+// Index of column `name` in the header row of a CSV table (read_csv); a failure when absent.
+std::size_t column(const std::vector<std::vector<std::string>>& rows, const std::string& name) {
+  for (std::size_t c = 0; !rows.empty() && c < rows[0].size(); ++c)
+    if (rows[0][c] == name) return c;
+  ADD_FAILURE() << "no column " << name;
+  return 0;
+}
+
 }  // namespace
 
 // lsdem saves its contact history, half-step velocities and platen motion in the checkpoint
@@ -141,11 +149,7 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     // Its stages add up to the run: every analysis and breakage event in exactly one stage.
     const auto rows = crumble::read_csv((whole / "stages.csv").string());
     ASSERT_GE(rows.size(), 2u);
-    std::size_t ca = 0, ce = 0;
-    for (std::size_t c = 0; c < rows[0].size(); ++c) {
-      if (rows[0][c] == "analyses") ca = c;
-      if (rows[0][c] == "breaking_analyses") ce = c;
-    }
+    const std::size_t ca = column(rows, "analyses"), ce = column(rows, "breaking_analyses");
     long na = 0, ne = 0;
     for (std::size_t i = 1; i < rows.size(); ++i) na += std::stol(rows[i][ca]), ne += std::stol(rows[i][ce]);
     EXPECT_EQ(na, sa["analyses"].get<long>());
@@ -156,14 +160,8 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     // is over the steps since the resume, not since the stage began.
     const auto rows = crumble::read_csv((killed / "stages.csv").string());
     ASSERT_GE(rows.size(), 2u);
-    auto col = [&](const std::string& n) {
-      for (std::size_t c = 0; c < rows[0].size(); ++c)
-        if (rows[0][c] == n) return c;
-      ADD_FAILURE() << "stages.csv has no column " << n;
-      return std::size_t{0};
-    };
-    const std::size_t c_step = col("step"), c_steps = col("steps"), c_engine = col("engine_s"),
-                      c_per = col("engine_ms_per_step");
+    const std::size_t c_step = column(rows, "step"), c_steps = column(rows, "steps"),
+                      c_engine = column(rows, "engine_s"), c_per = column(rows, "engine_ms_per_step");
     const long resumed_at = sb["resumed_from_step"].get<long>();
     bool seen = false;
     for (std::size_t i = 1; i < rows.size(); ++i) {
@@ -248,11 +246,7 @@ TEST(Resume, BulletRunResumedAfterSigkillStaysWithinTolerance) {
   // takes the time step of the checkpoint's stress, not that of zero stress.
   const auto rows = crumble::read_csv((killed / "series.csv").string());
   ASSERT_GE(rows.size(), 2u);
-  std::size_t c_step = 0, c_dt = 0;
-  for (std::size_t c = 0; c < rows[0].size(); ++c) {
-    if (rows[0][c] == "step") c_step = c;
-    if (rows[0][c] == "dt_s") c_dt = c;
-  }
+  const std::size_t c_step = column(rows, "step"), c_dt = column(rows, "dt_s");
   ASSERT_GT(c_dt, 0u);
   long after = 0;
   for (std::size_t i = 1; i < rows.size(); ++i)
@@ -311,11 +305,12 @@ TEST(Resume, EventsRowsMatchAnalysesAcrossAnInterruption) {
   const std::string sets =
       " --quiet --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
       " --set schedule.every_steps=50 --set output.checkpoint_every=500";
-  // SIGKILL once the first checkpoint exists: the .part files then hold rows past the
-  // checkpoint, which the resume must drop, keeping every row up to the checkpoint step.
+  // SIGKILL past the first checkpoint (step 500): the .part files then hold rows past the
+  // checkpoint, which the resume must drop, keeping every row up to the checkpoint step. (The
+  // kill follows the run's own series, not a clock: a loaded machine once let the whole run
+  // end between a poll for the checkpoint file and a fixed sleep.)
   const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + out.string() + sets;
-  const auto first = run_cli("--version >/dev/null; " + cmd + " 2>&1 & p=$!; for i in $(seq 1 1500); do [ -f " +
-                             (out / "checkpoint.json").string() + " ] && break; sleep 0.1; done; sleep 0.1; kill -KILL $p");
+  const auto first = run_and_kill(cmd, out, 600);
   ASSERT_TRUE(fs::exists(out / "checkpoint.json")) << first.output;
   ASSERT_FALSE(fs::exists(out / "summary.json")) << "the run ended before it was killed: " << first.output;
   const auto second = run_cli("run " + scen + " --out " + out.string() + sets + " --resume");
@@ -325,4 +320,21 @@ TEST(Resume, EventsRowsMatchAnalysesAcrossAnInterruption) {
   EXPECT_GT(s2["analyses"].get<long>(), 0);
   EXPECT_GT(s2["breakage_events"].get<long>(), 0);
   EXPECT_EQ(data_rows(slurp(out / "events.csv")), s2["analyses"].get<long>());
+}
+
+// A run killed while writing a row leaves it cut in the .part file: the resumed stream keeps
+// only whole rows up to the resume step (a cut "0.0052" once passed as step 0, and a cut step
+// "3" of 312 would pass as step 3).
+TEST(Resume, CutRowsOfAKilledRunAreDropped) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_resume_test" / "cut_rows";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string header = "time_s,step,outcome,note";
+  const std::string whole = "0.1,100,split,\n0.2,200,intact,x\n";
+  for (const std::string cut : {"0.0052", "0.31,3", "0.31,312,spl", "0.31,"}) {
+    std::ofstream(dir / "events.csv.part") << header << "\n" << whole << "0.3,300,split,y\n" << cut;
+    crumble::CsvStream s((dir / "events.csv").string(), header, 250);
+    s.finish();
+    EXPECT_EQ(slurp(dir / "events.csv"), header + "\n" + whole) << "cut row: " << cut;
+  }
 }
