@@ -119,6 +119,13 @@ CsvStream::CsvStream(std::string path, const std::string& header, long keep_unti
   out_.open(path_ + ".part", std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write '" + path_ + ".part'");
   out_ << std::setprecision(10) << header << "\n" << kept;
+  if (keep_until_step >= 0) {
+    // The earlier run's finished file now lives on in the .part: a resumed run that stops on a
+    // guard (its files stay .part) must not leave it beside, looking complete.
+    out_.flush();
+    std::error_code ec;
+    fs::remove(path_, ec);
+  }
 }
 
 CsvStream::~CsvStream() {

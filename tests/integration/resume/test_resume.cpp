@@ -337,4 +337,12 @@ TEST(Resume, CutRowsOfAKilledRunAreDropped) {
     s.finish();
     EXPECT_EQ(slurp(dir / "events.csv"), header + "\n" + whole) << "cut row: " << cut;
   }
+  // Resumed from a finished file: until the run finishes, only the .part holds its rows.
+  std::ofstream(dir / "events.csv") << header << "\n" << whole << "0.3,300,split,y\n";
+  {
+    crumble::CsvStream s((dir / "events.csv").string(), header, 250);
+    EXPECT_FALSE(fs::exists(dir / "events.csv"));
+    EXPECT_EQ(slurp(dir / "events.csv.part"), header + "\n" + whole);
+  }
+  EXPECT_FALSE(fs::exists(dir / "events.csv"));
 }
