@@ -138,13 +138,14 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 // Keys that may differ between a run and its resumption: the thread count (results do not
 // depend on it), simulation.max_steps (raising it is how a run stopped by it continues),
 // the wall-time checkpoint interval, and what a physical guard's message advises after a
-// stop: the time step schedule, the contact solver's convergence settings (iterations, Bullet's
-// tolerance and residual) and the guards themselves
+// stop: the time step schedule, the contact solver's settings (iterations, Bullet's tolerance,
+// residual and deep-penetration correction) and the guards themselves
 // (they only check the state; a smaller step or a better converged contact solution from the
 // last checkpoint on is how a stopped run goes on).
 const std::set<std::string> kResumeMayDiffer = {
     "/threads",         "/simulation/max_steps",   "/output/checkpoint_every_s", "/time_step",
-    "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/simulation/guards"};
+    "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/engine/deep_penetration",
+    "/engine/deep_erp",         "/simulation/guards"};
 
 // Appends {"path", "was", "now"} for every leaf (or whole value, where the types differ) in
 // which `was` and `now` differ below `path`.
@@ -207,7 +208,8 @@ Json check_resumable(const std::string& out, const Json& effective) {
                    ", now " + show(effective) +
                    "); a resumed run must use the same effective scenario (only /threads, "
                    "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations, "
-                   "/engine/solver_tolerance, /engine/solver_residual and /simulation/guards may change). Use the same file and --set options, or start a new run "
+                   "/engine/solver_tolerance, /engine/solver_residual, /engine/deep_penetration, /engine/deep_erp and "
+                   "/simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 

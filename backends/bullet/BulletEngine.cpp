@@ -114,6 +114,28 @@ class ToleranceSolver : public btSequentialImpulseConstraintSolver {
   double tolerance = 0;
   int max_iterations = -1;
   double max_change = 0;
+  double deep_depth = 0;  // internal units; 0 = every contact at the global β (eq. 8)
+  double deep_erp = 0;
+
+  // Contact points deeper than deep_depth take deep_erp as their own β (Bullet's per-point
+  // ERP); with the split impulse on (see fix_scale) their correction adds no velocity.
+  btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
+                                        int numManifolds, btTypedConstraint** constraints, int numConstraints,
+                                        const btContactSolverInfo& info, btIDebugDraw* debug) override {
+    if (deep_depth > 0)
+      for (int i = 0; i < numManifolds; ++i)
+        for (int j = 0; j < manifolds[i]->getNumContacts(); ++j) {
+          btManifoldPoint& cp = manifolds[i]->getContactPoint(j);
+          if (cp.getDistance() < -deep_depth) {
+            cp.m_contactERP = deep_erp;
+            cp.m_contactPointFlags |= BT_CONTACT_FLAG_HAS_CONTACT_ERP;
+          } else {
+            cp.m_contactPointFlags &= ~BT_CONTACT_FLAG_HAS_CONTACT_ERP;
+          }
+        }
+    return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlySetup(bodies, numBodies, manifolds, numManifolds,
+                                                                            constraints, numConstraints, info, debug);
+  }
 
   btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
                                              int numManifolds, btTypedConstraint** constraints, int numConstraints,
@@ -305,6 +327,16 @@ struct BulletEngine::Impl {
       scale = 1;
     }
     ref_length = first_diameter > 0 ? first_diameter * scale : 1.0;
+    if (opt.deep_penetration > 0) {
+      // Contacts deeper than deep_penetration × d get their own β (deep_erp, ToleranceSolver)
+      // and Bullet's split impulse: the correction moves the bodies without adding velocity,
+      // so no kinetic energy (the reason eq. 8's β is small); shallower ones keep eq. 8.
+      btContactSolverInfo& si = world->getSolverInfo();
+      si.m_splitImpulse = 1;
+      si.m_splitImpulsePenetrationThreshold = -opt.deep_penetration * ref_length;
+      solver->deep_depth = opt.deep_penetration * ref_length;
+      solver->deep_erp = opt.deep_erp;
+    }
     if (have_container) build_container();
   }
 
@@ -731,6 +763,10 @@ const OptionTable& bullet_options() {
                     "stop when impulses change by at most this fraction between iterations (0 = always run solver_iterations, as Zhu & Zhao 2019 §2.2)"),
         opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
         opt::number("erp", d.erp, 0, 1, "", "penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
+        opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
+                    "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
+                    "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
+        opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
         opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (Zhu & Zhao 2019 §5 use 70)"),
     };
   }();
@@ -748,6 +784,8 @@ BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
   o.solver_tolerance = r.number("solver_tolerance");
   o.solver_residual = r.number("solver_residual");
   o.erp = r.number("erp");
+  o.deep_penetration = r.number("deep_penetration");
+  o.deep_erp = r.number("deep_erp");
   o.mass_scale = r.number("mass_scale");
   return o;
 }

@@ -20,6 +20,10 @@
 //                          velocity changes by more than this many length units per step
 //                          (|Δv|·dt·length_scale) in an iteration
 //   erp                    [0, 1], default 0.003: penetration correction β (Zhu & Zhao 2019 eq. 8)
+//   deep_penetration       [0, 1], default 0 = off: contact points deeper than this × the first
+//                          grain's d are corrected at deep_erp (default 0.2) by Bullet's split
+//                          impulse, which moves the bodies without adding velocity (not in the
+//                          paper: against fragments creeping into neighbours under load)
 //   mass_scale             > 0, default 1: grain and platen masses and inertias are
 //                          multiplied by it (Zhu & Zhao 2019 §5: 70); weights stay physical
 //
@@ -66,6 +70,8 @@ class BulletEngine final : public Engine {
     double solver_tolerance = 2e-4;
     double solver_residual = 0;
     double erp = 0.003;
+    double deep_penetration = 0;  // fraction of the first grain's d; 0 = off
+    double deep_erp = 0.2;
     double mass_scale = 1;
   };
   static Options read_options(const Config& cfg);
