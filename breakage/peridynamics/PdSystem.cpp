@@ -179,6 +179,18 @@ void PdSystem::build_box() {
     i = j + 1;
   }
   B.slab_blocks.push_back(static_cast<std::int32_t>(B.block_cell.size()));
+  const auto slab_groups = [&B](std::int32_t s) {
+    return B.block_group[static_cast<std::size_t>(B.slab_blocks[static_cast<std::size_t>(s) + 1])] -
+           B.block_group[static_cast<std::size_t>(B.slab_blocks[static_cast<std::size_t>(s)])];
+  };
+  for (int parity = 0; parity < 2; ++parity) {
+    auto& order = B.slab_order[parity];
+    order.clear();
+    for (auto s = static_cast<std::int32_t>(parity); s + 1 < static_cast<std::int32_t>(B.slab_blocks.size()); s += 2)
+      order.push_back(s);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::int32_t a, std::int32_t b) { return slab_groups(a) > slab_groups(b); });
+  }
   if (B.delta.size() > static_cast<std::size_t>(INT32_MAX / 8))
     throw std::invalid_argument("peridynamics: too many bonds for the box layout");
   B.cur.assign(B.alive.size(), 0.0);
@@ -255,16 +267,22 @@ void PdSystem::compute_forces(int threads) {
   const kernel::BoxView v{B.x.data(), B.y.data(), B.z.data(), B.at.data(), B.b.data(), B.th.data(),
                           B.fx.data(), B.fy.data(), B.fz.data(), B.block_cell.data(), B.block_group.data(),
                           B.delta.data(), B.len.data(), B.alive.data(), B.cur.data()};
-  const int slabs = static_cast<int>(B.slab_blocks.size()) - 1;
   const std::int32_t* sb = B.slab_blocks.data();
   const auto points = static_cast<std::int64_t>(n);
   bool broke = false;
-  // Even slabs, then odd ones: the same order of additions into every cell for any thread count.
+  // Even slabs, then odd ones: the same order of additions into every cell for any thread count
+  // (slabs of one colour touch disjoint cells, so which thread takes which does not matter).
+  const int n_even = static_cast<int>(B.slab_order[0].size()), n_odd = static_cast<int>(B.slab_order[1].size());
+  const std::int32_t* order[2] = {B.slab_order[0].data(), B.slab_order[1].data()};
+  const int n_colour[2] = {n_even, n_odd};
 #pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : broke)
   {
     for (int parity = 0; parity < 2; ++parity) {
-#pragma omp for schedule(static)
-      for (int s = parity; s < slabs; s += 2) broke = kernel::dilatation(v, sb[s], sb[s + 1], sc_) || broke;
+#pragma omp for schedule(dynamic, 1)
+      for (int k = 0; k < n_colour[parity]; ++k) {
+        const std::int32_t s = order[parity][k];
+        broke = kernel::dilatation(v, sb[s], sb[s + 1], sc_) || broke;
+      }
     }
 #pragma omp for schedule(static)
     for (std::int64_t i = 0; i < points; ++i) {  // Zhu & Zhao 2019 eq. 4: θ_i = g_i Σ; stored as a_i θ_i
@@ -272,8 +290,11 @@ void PdSystem::compute_forces(int threads) {
       B.at[c] = a_[static_cast<std::size_t>(i)] * g_[static_cast<std::size_t>(i)] * B.th[c];
     }
     for (int parity = 0; parity < 2; ++parity) {
-#pragma omp for schedule(static)
-      for (int s = parity; s < slabs; s += 2) kernel::force(v, sb[s], sb[s + 1]);
+#pragma omp for schedule(dynamic, 1)
+      for (int k = 0; k < n_colour[parity]; ++k) {
+        const std::int32_t s = order[parity][k];
+        kernel::force(v, sb[s], sb[s + 1]);
+      }
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
