@@ -194,6 +194,30 @@ void PdSystem::build_box() {
   if (B.delta.size() > static_cast<std::size_t>(INT32_MAX / 8))
     throw std::invalid_argument("peridynamics: too many bonds for the box layout");
   B.cur.assign(B.alive.size(), 0.0);
+
+  // The broken-bond counts read the box's lanes, so a check needs no sync_alive(): per lane its
+  // number of CSR entries, per directed face bond its lane, and the entries outside the box
+  // (they never change) counted once here.
+  std::vector<std::int32_t> lane_of(alive_.size(), -1);
+  B.lane_entries.assign(B.alive.size(), 0);
+  for (std::size_t k = 0; k < B.alive.size(); ++k)
+    for (int e = 0; e < 2; ++e)
+      if (const std::int32_t q = B.csr[2 * k + e]; q >= 0) {
+        lane_of[static_cast<std::size_t>(q)] = static_cast<std::int32_t>(k);
+        ++B.lane_entries[k];
+      }
+  B.broken_outside = 0;
+  for (std::size_t q = 0; q < alive_.size(); ++q) B.broken_outside += lane_of[q] < 0 && alive_[q] == 0.0;
+  B.face_lane.clear();
+  B.face_broken_outside = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (auto q : L_.face_bond[i]) {
+      if (q < 0) continue;
+      if (const std::int32_t l = lane_of[static_cast<std::size_t>(q)]; l >= 0)
+        B.face_lane.push_back(l);
+      else
+        B.face_broken_outside += alive_[static_cast<std::size_t>(q)] == 0.0;
+    }
 }
 
 void PdSystem::sync_alive() const {
@@ -253,17 +277,12 @@ double PdSystem::stable_dt() const {
   return 2.0 * std::sqrt(mat_.density / worst);
 }
 
-void PdSystem::compute_forces(int threads) {
+void PdSystem::compute_forces(int threads) { forces_and_update(threads, nullptr); }
+
+void PdSystem::forces_and_update(int threads, const Update* up) {
   threads = std::max(1, threads);
   const std::size_t n = size();
   Box& B = box_;
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto c = static_cast<std::size_t>(B.cell[i]);
-    B.x[c] = pos_[4 * i];
-    B.y[c] = pos_[4 * i + 1];
-    B.z[c] = pos_[4 * i + 2];
-    B.th[c] = B.fx[c] = B.fy[c] = B.fz[c] = 0.0;
-  }
   const kernel::BoxView v{B.x.data(), B.y.data(), B.z.data(), B.at.data(), B.b.data(), B.th.data(),
                           B.fx.data(), B.fy.data(), B.fz.data(), B.block_cell.data(), B.block_group.data(),
                           B.delta.data(), B.len.data(), B.alive.data(), B.cur.data()};
@@ -272,11 +291,20 @@ void PdSystem::compute_forces(int threads) {
   bool broke = false;
   // Even slabs, then odd ones: the same order of additions into every cell for any thread count
   // (slabs of one colour touch disjoint cells, so which thread takes which does not matter).
-  const int n_even = static_cast<int>(B.slab_order[0].size()), n_odd = static_cast<int>(B.slab_order[1].size());
+  // Everything else is per point, so the whole step runs in one parallel region.
   const std::int32_t* order[2] = {B.slab_order[0].data(), B.slab_order[1].data()};
-  const int n_colour[2] = {n_even, n_odd};
+  const int n_colour[2] = {static_cast<int>(B.slab_order[0].size()), static_cast<int>(B.slab_order[1].size())};
 #pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : broke)
   {
+#pragma omp for schedule(static)
+    for (std::int64_t ii = 0; ii < points; ++ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      const auto c = static_cast<std::size_t>(B.cell[i]);
+      B.x[c] = pos_[4 * i];
+      B.y[c] = pos_[4 * i + 1];
+      B.z[c] = pos_[4 * i + 2];
+      B.th[c] = B.fx[c] = B.fy[c] = B.fz[c] = 0.0;
+    }
     for (int parity = 0; parity < 2; ++parity) {
 #pragma omp for schedule(dynamic, 1)
       for (int k = 0; k < n_colour[parity]; ++k) {
@@ -296,31 +324,31 @@ void PdSystem::compute_forces(int threads) {
         kernel::force(v, sb[s], sb[s + 1]);
       }
     }
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto c = static_cast<std::size_t>(B.cell[i]);
-    fx_[i] = B.fx[c];
-    fy_[i] = B.fy[c];
-    fz_[i] = B.fz[c];
+#pragma omp for schedule(static)
+    for (std::int64_t ii = 0; ii < points; ++ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      const auto c = static_cast<std::size_t>(B.cell[i]);
+      fx_[i] = B.fx[c];
+      fy_[i] = B.fy[c];
+      fz_[i] = B.fz[c];
+      if (up) {  // velocity Verlet, leapfrog form (step())
+        const double m = free_[i], dt = up->dt, c1 = up->c1, c2 = up->c2, lambda = lambda_;
+        vx_[i] = m * c2 * (c1 * vx_[i] + dt * (fx_[i] + lambda * bx_[i]) * up->inv_rho);
+        vy_[i] = m * c2 * (c1 * vy_[i] + dt * (fy_[i] + lambda * by_[i]) * up->inv_rho);
+        vz_[i] = m * c2 * (c1 * vz_[i] + dt * (fz_[i] + lambda * bz_[i]) * up->inv_rho);
+        pos_[4 * i] += dt * vx_[i];
+        pos_[4 * i + 1] += dt * vy_[i];
+        pos_[4 * i + 2] += dt * vz_[i];
+      }
+    }
   }
   if (broke) box_broke_ = true;
 }
 
 void PdSystem::step(double dt, double lambda, double damping, int threads) {
   lambda_ = lambda;
-  compute_forces(threads);
-  const std::size_t n = size();
-  const double inv_rho = 1.0 / mat_.density;
-  const double c1 = 1.0 - 0.5 * damping * dt, c2 = 1.0 / (1.0 + 0.5 * damping * dt);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double m = free_[i];
-    vx_[i] = m * c2 * (c1 * vx_[i] + dt * (fx_[i] + lambda * bx_[i]) * inv_rho);
-    vy_[i] = m * c2 * (c1 * vy_[i] + dt * (fy_[i] + lambda * by_[i]) * inv_rho);
-    vz_[i] = m * c2 * (c1 * vz_[i] + dt * (fz_[i] + lambda * bz_[i]) * inv_rho);
-    pos_[4 * i] += dt * vx_[i];
-    pos_[4 * i + 1] += dt * vy_[i];
-    pos_[4 * i + 2] += dt * vz_[i];
-  }
+  const Update up{dt, 1.0 - 0.5 * damping * dt, 1.0 / (1.0 + 0.5 * damping * dt), 1.0 / mat_.density};
+  forces_and_update(threads, &up);
 }
 
 void PdSystem::apply_operator(const Field3& u, Field3& out, int threads) const {
@@ -489,17 +517,14 @@ double PdSystem::external_work_at_rest() const {
 }
 
 long PdSystem::broken_bonds() const {
-  sync_alive();
-  long k = 0;
-  for (std::size_t q = 0; q < alive_.size(); ++q) k += alive_[q] == 0.0;
+  long k = box_.broken_outside;
+  for (std::size_t l = 0; l < box_.alive.size(); ++l) k += box_.alive[l] == 0.0 ? box_.lane_entries[l] : 0;
   return k;
 }
 
 long PdSystem::broken_face_bonds() const {
-  sync_alive();
-  long k = 0;
-  for (std::size_t i = 0; i < size(); ++i)
-    for (auto q : L_.face_bond[i]) k += q >= 0 && alive_[q] == 0.0;
+  long k = box_.face_broken_outside;
+  for (const auto l : box_.face_lane) k += box_.alive[static_cast<std::size_t>(l)] == 0.0;
   return k;
 }
 

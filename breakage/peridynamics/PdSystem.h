@@ -115,6 +115,10 @@ class PdSystem {
     void axpy(double a, const Field3& o);
   };
   void apply_operator(const Field3& u, Field3& out, int threads) const;
+  struct Update {  // one leapfrog step after the forces (step())
+    double dt, c1, c2, inv_rho;
+  };
+  void forces_and_update(int threads, const Update* up);
   void build_box();
   void sync_alive() const;
 
@@ -148,6 +152,9 @@ class PdSystem {
     // sphere's 6 slabs hold 1–29 % of the bond groups each; dealt in z order, one of two
     // threads took 98 % of the odd colour.)
     std::vector<std::int32_t> slab_order[2];
+    std::vector<std::uint8_t> lane_entries;  // per lane: its CSR entries (0–2)
+    std::vector<std::int32_t> face_lane;     // per directed face bond in the box: its lane
+    long broken_outside = 0, face_broken_outside = 0;  // broken CSR entries without a lane
   } box_;
   mutable bool box_broke_ = false;  // a bond broke in the box since alive_ was last brought up to date
 };

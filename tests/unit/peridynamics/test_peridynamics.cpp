@@ -313,7 +313,11 @@ TEST(PeridynamicsKernel, HalfBondBoxMatchesFullFamilySums) {
   }
   EXPECT_GT(broken, 0);
   EXPECT_EQ(sys.alive(), alive);
-  EXPECT_EQ(sys.broken_bonds(), broken);
+  EXPECT_EQ(sys.broken_bonds(), broken);  // counted from the box's lanes, without a sync
+  long face_broken = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (auto q : L.face_bond[i]) face_broken += q >= 0 && alive[static_cast<std::size_t>(q)] == 0.0;
+  EXPECT_EQ(sys.broken_face_bonds(), face_broken);
   double fmax = 0, dmax = 0;
   for (std::size_t i = 0; i < n; ++i) {
     Vec3 f{0, 0, 0};
@@ -398,16 +402,25 @@ TEST(PeridynamicsKernel, BondsBreakAtBothEndsTogether) {
       rev[q] = static_cast<std::int32_t>(std::lower_bound(b, e, i) - L.neighbours.data());
       ASSERT_EQ(L.neighbours[rev[q]], i);
     }
-  long checked = 0;
+  long checked = 0, face_checked = 0;
   for (int n = 0; n < 400; ++n) {
     sys.step(dt, 4e7 * n * dt, 0.0);  // 4e7 N/s: far past the strength within the run
     if (n % 5) continue;
+    long broken = 0, face_broken = 0;
     for (std::size_t q = 0; q < rev.size(); ++q) {
       ASSERT_EQ(sys.alive()[q], sys.alive()[rev[q]]) << "bond " << q << " step " << n;
-      checked += sys.alive()[q] == 0.0;
+      broken += sys.alive()[q] == 0.0;
     }
+    for (const auto& fb : L.face_bond)
+      for (auto q : fb) face_broken += q >= 0 && sys.alive()[static_cast<std::size_t>(q)] == 0.0;
+    // The counts a check reads come from the box's lanes: they follow the breaks.
+    ASSERT_EQ(sys.broken_bonds(), broken) << "step " << n;
+    ASSERT_EQ(sys.broken_face_bonds(), face_broken) << "step " << n;
+    checked += broken;
+    face_checked += face_broken;
   }
   EXPECT_GT(checked, 0);
+  EXPECT_GT(face_checked, 0);
 }
 
 // The spectral step estimate sits just below the real stability limit: undamped motion
