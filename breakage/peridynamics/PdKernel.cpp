@@ -380,7 +380,7 @@ inline double reduce8(const double* l) {
 CRUMBLE_PD_CLONES
 void linear_dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* __restrict off,
                        const std::int32_t* __restrict nbr, const double* __restrict len, const double* __restrict w,
-                       const double* __restrict rx, const double* __restrict ry, const double* __restrict rz,
+                       const double* __restrict xx, const double* __restrict xy, const double* __restrict xz,
                        const double* __restrict ux, const double* __restrict uy, const double* __restrict uz,
                        const double* __restrict g, const double* __restrict a, double* __restrict at) {
   for (std::int32_t i = i0; i < i1; ++i) {
@@ -390,8 +390,7 @@ void linear_dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* __r
       const int m = std::min<std::int32_t>(kLanes, q1 - q0);
       for (int k = 0; k < m; ++k) {
         const std::int32_t q = q0 + k, j = nbr[q];
-        const double e = ((rx[j] - rx[i]) * (ux[j] - ux[i]) + (ry[j] - ry[i]) * (uy[j] - uy[i]) +
-                          (rz[j] - rz[i]) * (uz[j] - uz[i])) / len[q];
+        const double e = (xx[q] * (ux[j] - ux[i]) + xy[q] * (uy[j] - uy[i]) + xz[q] * (uz[j] - uz[i])) / len[q];
         acc[k] += w[q] * len[q] * e;
       }
     }
@@ -402,7 +401,7 @@ void linear_dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* __r
 CRUMBLE_PD_CLONES
 void linear_force(std::int32_t i0, std::int32_t i1, const std::int32_t* __restrict off,
                   const std::int32_t* __restrict nbr, const double* __restrict len, const double* __restrict w,
-                  const double* __restrict rx, const double* __restrict ry, const double* __restrict rz,
+                  const double* __restrict xx, const double* __restrict xy, const double* __restrict xz,
                   const double* __restrict ux, const double* __restrict uy, const double* __restrict uz,
                   const double* __restrict at, const double* __restrict b, double* __restrict fx,
                   double* __restrict fy, double* __restrict fz) {
@@ -414,7 +413,7 @@ void linear_force(std::int32_t i0, std::int32_t i1, const std::int32_t* __restri
       const int m = std::min<std::int32_t>(kLanes, q1 - q0);
       for (int k = 0; k < m; ++k) {
         const std::int32_t q = q0 + k, j = nbr[q];
-        const double dx = rx[j] - rx[i], dy = ry[j] - ry[i], dz = rz[j] - rz[i];
+        const double dx = xx[q], dy = xy[q], dz = xz[q];
         const double r = len[q];
         const double e = (dx * (ux[j] - ux[i]) + dy * (uy[j] - uy[i]) + dz * (uz[j] - uz[i])) / r;
         const double s = w[q] * ((at[i] + at[j]) * r + (b[i] + b[j]) * e) / r;  // s dx = w (...) n

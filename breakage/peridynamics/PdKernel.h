@@ -50,15 +50,15 @@ void force(const BoxView& v, std::int32_t k0, std::int32_t k1);
 bool dilatation_portable(const BoxView& v, std::int32_t k0, std::int32_t k1, double sc);
 void force_portable(const BoxView& v, std::int32_t k0, std::int32_t k1);
 
-// The same two passes linearised about the reference positions (rx, ry, rz) for a small
-// displacement (ux, uy, uz): e = n·(u_j − u_i). Used by the static solve and the
-// spectral step estimate.
+// The same two passes linearised about the reference positions for a small displacement
+// (ux, uy, uz): e = n·(u_j − u_i), over the CSR lists; (xx, xy, xz) per CSR entry is the bond
+// vector ξ = X_j − X_i. Used by the static solve and the spectral step estimate.
 void linear_dilatation(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr,
-                       const double* len, const double* w, const double* rx, const double* ry, const double* rz,
+                       const double* len, const double* w, const double* xx, const double* xy, const double* xz,
                        const double* ux, const double* uy, const double* uz, const double* g, const double* a,
                        double* at);
 void linear_force(std::int32_t i0, std::int32_t i1, const std::int32_t* off, const std::int32_t* nbr,
-                  const double* len, const double* w, const double* rx, const double* ry, const double* rz,
+                  const double* len, const double* w, const double* xx, const double* xy, const double* xz,
                   const double* ux, const double* uy, const double* uz, const double* at, const double* b,
                   double* fx, double* fy, double* fz);
 

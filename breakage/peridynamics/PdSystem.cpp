@@ -360,6 +360,18 @@ void PdSystem::apply_operator(const Field3& u, Field3& out, int threads) const {
   const std::int32_t* nbr = L_.neighbours.data();
   const double* len = L_.length.data();
   const double* w = alive_.data();
+  if (xi_x_.size() != L_.neighbours.size()) {  // bond vectors ξ = X_j − X_i per CSR entry, once
+    xi_x_.resize(L_.neighbours.size());
+    xi_y_.resize(L_.neighbours.size());
+    xi_z_.resize(L_.neighbours.size());
+    for (std::int32_t i = 0; i < n; ++i)
+      for (std::int32_t q = off[i]; q < off[i + 1]; ++q) {
+        const auto j = static_cast<std::size_t>(nbr[q]);
+        xi_x_[static_cast<std::size_t>(q)] = rx_[j] - rx_[static_cast<std::size_t>(i)];
+        xi_y_[static_cast<std::size_t>(q)] = ry_[j] - ry_[static_cast<std::size_t>(i)];
+        xi_z_[static_cast<std::size_t>(q)] = rz_[j] - rz_[static_cast<std::size_t>(i)];
+      }
+  }
   std::vector<double> at(n);
   out.resize(n);
   const std::int32_t chunk = 64, blocks = (n + chunk - 1) / chunk;
@@ -367,11 +379,12 @@ void PdSystem::apply_operator(const Field3& u, Field3& out, int threads) const {
   {
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::linear_dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, rx_.data(), ry_.data(),
-                             rz_.data(), u.x.data(), u.y.data(), u.z.data(), g_.data(), a_.data(), at.data());
+      kernel::linear_dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, xi_x_.data(),
+                                xi_y_.data(), xi_z_.data(), u.x.data(), u.y.data(), u.z.data(), g_.data(), a_.data(), at.data());
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
-      kernel::linear_force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, rx_.data(), ry_.data(), rz_.data(),
+      kernel::linear_force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, xi_x_.data(), xi_y_.data(),
+                           xi_z_.data(),
                         u.x.data(), u.y.data(), u.z.data(), at.data(), b_.data(), out.x.data(), out.y.data(),
                         out.z.data());
   }

@@ -134,6 +134,7 @@ class PdSystem {
   std::vector<double> g_;             // 3V/m_i (eq. 4)
   std::vector<double> a_;             // V(3K − 5μ)/m_i
   std::vector<double> b_;             // 15μV/m_i
+  mutable std::vector<double> xi_x_, xi_y_, xi_z_;  // per CSR entry: X_j − X_i (the linearised passes)
   mutable std::vector<double> alive_;  // per CSR bond: weight, or 0 once broken (see sync_alive)
 
   // The box layout of the explicit passes (PdKernel.h BoxView).
