@@ -74,6 +74,11 @@ class BreakageModel {
   // fracture is expressed in g's body frame.
   virtual BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const = 0;
 
+  // Threads one analysis may use from now on. The Simulation calls it before each batch of
+  // analyses: all of its threads when the batch holds one grain, else 1 (one grain per
+  // thread). A model whose results depend on it must ignore it; the default does.
+  virtual void set_analysis_threads(int threads) const { (void)threads; }
+
   // The figures analyse() reports, in a fixed order (one events.csv column each).
   virtual std::vector<std::string> figure_names() const { return {}; }
   // Screening and schedule this model's method prescribes; a scenario's "screening" and

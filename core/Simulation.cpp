@@ -437,14 +437,24 @@ void Simulation::check_breakage(const RunState& st) {
     }
     executor_->analyse(*model_, ctx_.materials, jobs, results, errors);
   } else {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (long k = 0; k < n; ++k) {
+    // One grain: its analysis gets every thread (the peridynamic passes are bitwise the same
+    // on any count), so a check that selects one grain does not leave the other cores idle.
+    // (Outside any parallel region: nested in an inactive one, OpenMP would start new threads
+    // for each of the analysis' thousands of regions.)
+    const auto analyse = [&](long k) {
       const Grain& g = grains_[candidates[k]];
       try {
         results[k] = model_->analyse(g, ctx_.materials[g.material], on[candidates[k]]);
       } catch (const std::exception& e) {
         errors[k] = e.what();
       }
+    };
+    model_->set_analysis_threads(n == 1 ? threads : 1);
+    if (n == 1) {
+      analyse(0);
+    } else {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+      for (long k = 0; k < n; ++k) analyse(k);
     }
   }
   timings_.analyses += seconds_since(t0);

@@ -244,7 +244,9 @@ const OptionTable& peridynamics_options() {
         opt::number("post_split_transits", d.post_split_transits, 0, 1e6, "", "wave transits integrated after the first split"),
         opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
         opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
-        opt::integer("threads", d.threads, 1, 1024, "threads inside one analysis (grains already run in parallel)"),
+        opt::integer("threads", d.threads, 1, 1024,
+                     "threads inside one analysis when a check analyses several grains (they already run in "
+                     "parallel); a check that analyses one grain gives it all of the run's threads"),
         // Outcome (§3.2).
         opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
                     "smaller clusters are fines, attached to the nearest piece"),
@@ -423,6 +425,7 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   BreakageAnalysis a;
   long points = 0, bonds = 0, steps = 0;
   double force_at_split = 0, first_break_force = 0, hold_steps = 0, quiet_max = 0;
+  const int threads = std::max(o_.threads, analysis_threads_.load());
   auto finish = [&](const std::string& outcome) {
     a.outcome = outcome;
     a.figures = {{"points", static_cast<double>(points)},
@@ -431,7 +434,8 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
                  {"force_at_split_N", force_at_split},
                  {"first_break_force_N", first_break_force},
                  {"hold_steps", hold_steps},
-                 {"quiet_transits_max", quiet_max}};
+                 {"quiet_transits_max", quiet_max},
+                 {"threads", static_cast<double>(threads)}};
     a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return a;
   };
@@ -496,7 +500,9 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
 
   // Linear ramp: the largest force grows at the size-dependent rate (§5).
   const double fmax = a.load;
-  const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), o_);
+  PdOptions ro = o_;
+  ro.threads = threads;
+  const RunResult r = run(sys, pd_loading_rate(o_, d_e) / fmax, 1.0, d_e, p_wave_speed(mat), ro);
   steps = r.steps;
   if (std::isfinite(r.lambda_first)) first_break_force = r.lambda_first * fmax;
   hold_steps = static_cast<double>(r.hold_steps);

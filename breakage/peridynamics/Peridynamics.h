@@ -38,6 +38,8 @@
 //   kinetic energy is below ke_tolerance × the elastic work (at most max_hold_transits).
 //   Or at max_steps (outcome step_limit).
 #pragma once
+#include <algorithm>
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -146,7 +148,8 @@ class PeridynamicsModel final : public BreakageModel {
   // the end); quiet_transits_max: the longest stretch at full load without a newly broken bond,
   // in P-wave transits (docs/performance.md, "Fewer analyses": why no rule cuts the hold).
   std::vector<std::string> figure_names() const override {
-    return {"points", "bonds", "steps", "force_at_split_N", "first_break_force_N", "hold_steps", "quiet_transits_max"};
+    return {"points", "bonds", "steps", "force_at_split_N", "first_break_force_N", "hold_steps", "quiet_transits_max",
+            "threads"};
   }
   // Zhu & Zhao 2019, §5: their screening, and a check every 0.08 MPa of platen stress.
   // Zhu & Zhao 2019 §5. The skip rule for grains analysed whole (Screening.h) stays off: it
@@ -160,9 +163,12 @@ class PeridynamicsModel final : public BreakageModel {
   std::string load_measure_name() const override { return "max_contact_force_N"; }
   double load_measure(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
   const PdOptions& options() const { return o_; }
+  // An analysis runs on max(breakage.threads, this) threads; results do not depend on it.
+  void set_analysis_threads(int threads) const override { analysis_threads_.store(std::max(1, threads)); }
 
  private:
   PdOptions o_;
+  mutable std::atomic<int> analysis_threads_{1};
 };
 
 std::unique_ptr<BreakageModel> make_peridynamics(const Config& cfg, const EngineContext& ctx);
