@@ -380,7 +380,8 @@ void PdSystem::apply_operator(const Field3& u, Field3& out, int threads) const {
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
       kernel::linear_dilatation(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, xi_x_.data(),
-                                xi_y_.data(), xi_z_.data(), u.x.data(), u.y.data(), u.z.data(), g_.data(), a_.data(), at.data());
+                                xi_y_.data(), xi_z_.data(), u.x.data(), u.y.data(), u.z.data(), g_.data(), a_.data(),
+                                at.data());
 #pragma omp for schedule(static)
     for (std::int32_t k = 0; k < blocks; ++k)
       kernel::linear_force(k * chunk, std::min(n, (k + 1) * chunk), off, nbr, len, w, xi_x_.data(), xi_y_.data(),
