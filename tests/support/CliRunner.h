@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 namespace crumble::testing_support {
 
@@ -42,6 +43,15 @@ inline std::string scenario_file(const std::string& suite, const std::string& na
 inline std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
   return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// Index of column `name` in the header row of a CSV table (crumble::read_csv); a test
+// failure when absent.
+inline std::size_t column(const std::vector<std::vector<std::string>>& rows, const std::string& name) {
+  for (std::size_t c = 0; !rows.empty() && c < rows[0].size(); ++c)
+    if (rows[0][c] == name) return c;
+  ADD_FAILURE() << "no column " << name;
+  return 0;
 }
 
 }  // namespace crumble::testing_support

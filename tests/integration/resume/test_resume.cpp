@@ -22,6 +22,7 @@
 
 namespace fs = std::filesystem;
 using crumble::testing_support::run_cli;
+using crumble::testing_support::column;
 using crumble::testing_support::slurp;
 
 namespace {
@@ -73,14 +74,6 @@ std::string without_columns(const std::string& csv, const std::set<std::string>&
     header = false;
   }
   return out;
-}
-
-// Index of column `name` in the header row of a CSV table (read_csv); a failure when absent.
-std::size_t column(const std::vector<std::vector<std::string>>& rows, const std::string& name) {
-  for (std::size_t c = 0; !rows.empty() && c < rows[0].size(); ++c)
-    if (rows[0][c] == name) return c;
-  ADD_FAILURE() << "no column " << name;
-  return 0;
 }
 
 }  // namespace

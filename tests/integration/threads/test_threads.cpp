@@ -4,41 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "scenarios/Writers.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
+using crumble::testing_support::column;
 using crumble::testing_support::run_cli;
-using crumble::testing_support::slurp;
 
-namespace {
-
-std::vector<std::vector<std::string>> read_csv(const fs::path& p) {
-  std::vector<std::vector<std::string>> rows;
-  std::stringstream in(slurp(p));
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    std::vector<std::string> row;
-    std::stringstream ls(line);
-    std::string cell;
-    while (std::getline(ls, cell, ',')) row.push_back(cell);
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-std::size_t column(const std::vector<std::vector<std::string>>& rows, const std::string& name) {
-  for (std::size_t k = 0; k < rows.at(0).size(); ++k)
-    if (rows[0][k] == name) return k;
-  ADD_FAILURE() << "no column " << name;
-  return 0;
-}
-
-}  // namespace
 
 // Zhu & Zhao 2019 §4.2: the 2 mm grain between two plates, checked every 0.5 MPa until it
 // splits (a few analyses, each the only one of its check).
@@ -52,7 +27,7 @@ TEST(Threads, AOneGrainCheckRunsOnEveryThreadWithTheSameEvents) {
                            out.string() + " --threads " + std::to_string(threads) +
                            " --set schedule.every_stress=0.5e6 --set output.plots=false --set output.vtk_final=false");
     ASSERT_EQ(r.status, 0) << r.output;
-    events.push_back(read_csv(out / "events.csv"));
+    events.push_back(crumble::read_csv((out / "events.csv").string()));
   }
   const auto& a = events[0];
   const auto& b = events[1];
