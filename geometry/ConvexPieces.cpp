@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -24,7 +25,7 @@ double hull_volume(const std::vector<Vec3>& pts) {
   if (pts.size() < 4) return 0;
   try {
     return polyhedron_mass_properties(convex_hull(pts)).volume;
-  } catch (const std::invalid_argument&) {
+  } catch (const std::exception&) {  // flat, or too degenerate for the hull (a rejected cut)
     return 0;
   }
 }
@@ -99,12 +100,16 @@ Polygon planar_hull(const std::vector<int>& ids, const Vec3& n, const std::vecto
 // point where an edge crosses the plane is computed once per edge (from its lower index), so
 // neighbouring polygons share it and stay connected.
 std::pair<std::vector<Piece>, std::vector<Piece>> cut(const Piece& piece, const Vec3& n, double offset,
-                                                      std::vector<Vec3>& v) {
+                                                      double extent, std::vector<Vec3>& v) {
   std::unordered_map<int, double> side;
+  // A vertex within 1e-7 of the piece's extent of the plane is on it: no crossing point lands
+  // next to a vertex (near-duplicate points defeat the hull's tolerances).
+  const double on_plane = 1e-7 * extent;
   auto s_of = [&](int i) {
     auto it = side.find(i);
     if (it != side.end()) return it->second;
-    const double s = dot(n, v[i]) - offset;
+    double s = dot(n, v[i]) - offset;
+    if (std::abs(s) <= on_plane) s = 0;
     side.emplace(i, s);
     return s;
   };
@@ -211,7 +216,7 @@ Candidate best_cut(const Entry& e, std::size_t max_parts, std::vector<Vec3>& v) 
       }
       if (depth > best_depth) best_depth = depth, deepest = p;
     }
-  } catch (const std::invalid_argument&) {
+  } catch (const std::exception&) {
     return best;
   }
   for (int k = 0; k < 3; ++k) {
@@ -225,7 +230,7 @@ Candidate best_cut(const Entry& e, std::size_t max_parts, std::vector<Vec3>& v) 
     const double at_deepest = (dot(n, deepest) - lo) / (hi - lo);
     for (double q : {at_deepest, 0.5, 0.25, 0.75}) {
       if (!(q > 1e-9 && q < 1 - 1e-9)) continue;
-      auto [below, above] = cut(e.piece, n, lo + q * (hi - lo), v);
+      auto [below, above] = cut(e.piece, n, lo + q * (hi - lo), hi - lo, v);
       if (below.empty() || above.empty()) continue;
       Candidate cand;
       double sum = 0;

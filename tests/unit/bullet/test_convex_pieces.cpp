@@ -5,38 +5,18 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "geometry/ConvexHull.h"
 #include "geometry/ConvexPieces.h"
 #include "geometry/Shape.h"
 #include "geometry/TriMesh.h"
+#include "tests/support/Meshes.h"
 
 using namespace crumble;
+using crumble::testing_support::u_prism;
 
 namespace {
-
-// The prism of the U-shaped polygon in the x–z plane (3 wide, 2 tall, a notch 1 wide and 1
-// deep from the top), `length` along y: volume 5·length, hull 6·length.
-TriMesh u_prism(double length) {
-  const double ring[10][2] = {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {3, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
-  // The end face as triangles of ring indices (three rectangles, no T-junction).
-  const int cap[7][3] = {{0, 1, 7}, {0, 7, 8}, {0, 8, 9}, {1, 2, 6}, {1, 6, 7}, {3, 4, 5}, {3, 5, 6}};
-  TriMesh m;
-  for (double y : {0.0, length})
-    for (const auto& p : ring) m.vertices.push_back({p[0], y, p[1]});
-  for (const auto& t : cap) {
-    m.triangles.push_back({t[0], t[1], t[2]});
-    m.triangles.push_back({10 + t[0], 10 + t[2], 10 + t[1]});
-  }
-  for (int i = 0; i < 10; ++i) {
-    const int j = (i + 1) % 10;
-    m.triangles.push_back({i, 10 + i, 10 + j});
-    m.triangles.push_back({i, 10 + j, j});
-  }
-  if (polyhedron_mass_properties(m).volume < 0)
-    for (auto& t : m.triangles) std::swap(t[1], t[2]);
-  return m;
-}
 
 bool in_hull(const TriMesh& h, const Vec3& p, double tol) {
   for (const auto& t : h.triangles) {
@@ -61,6 +41,8 @@ TEST(ConvexPieces, AConvexShapeIsOnePiece) {
 // hulls add up to the solid exactly, and none of them reaches into the notch.
 TEST(ConvexPieces, AUPrismIsCutAtTheBottomOfItsNotch) {
   const TriMesh m = u_prism(3.0);
+  std::string why;
+  ASSERT_TRUE(is_closed_oriented_manifold(m, &why)) << why;
   const ConvexPieces r = convex_pieces(m);
   EXPECT_NEAR(r.volume, 15.0, 1e-12);
   EXPECT_NEAR(r.hull_volume, 18.0, 1e-12);
@@ -127,4 +109,27 @@ TEST(ConvexPieces, MaxPiecesBoundsTheCount) {
   const ConvexPieces r = convex_pieces(u_prism(3.0), o);
   EXPECT_LE(r.pieces.size(), 2u);
   EXPECT_LT(r.pieces_hull_volume, r.hull_volume);
+}
+
+// Robustness: blobs with random dents in random orientations on a coarse mesh (cut points land
+// next to vertices, and coplanar points abound) decompose without an error, and their pieces
+// hold at least the blob's volume.
+TEST(ConvexPieces, RandomDentedBlobsDecomposeWithoutError) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int k = 0; k < 30; ++k) {
+    ShapeResolution res;
+    res.mesh_subdivisions = 2;
+    TriMesh m = Shape::sphere(1e-3, res)->mesh();
+    const double a = 0.1 + 0.3 * u(rng), f1 = 1 + std::floor(4 * u(rng)), f2 = 1 + std::floor(4 * u(rng));
+    const Quat q = Quat::from_axis_angle(normalized(Vec3{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5}), 6.28 * u(rng));
+    for (auto& v : m.vertices) {
+      const double th = std::acos(std::clamp(v.z / norm(v), -1.0, 1.0)), ph = std::atan2(v.y, v.x);
+      v = q.rotate(v * (1.0 + a * std::sin(f1 * th) * std::cos(f2 * ph)));
+    }
+    const ConvexPieces r = convex_pieces(m);
+    EXPECT_GE(r.pieces.size(), 1u) << k;
+    EXPECT_GE(r.pieces_hull_volume, r.volume * (1 - 1e-9)) << k;
+    for (const auto& p : r.pieces) EXPECT_NO_THROW(convex_hull(p)) << k;
+  }
 }
