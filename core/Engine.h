@@ -3,6 +3,7 @@
 // (shape, strength, lineage) and pulls poses and velocities with read_state() when it
 // needs them. Units are SI; an engine that prefers other units scales internally.
 #pragma once
+#include <map>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -105,6 +106,10 @@ class Engine {
     double change = 0;
   };
   virtual SolverReport solver_report() const { return {}; }
+
+  // The engine's own figures for summary.json, each written as "engine_<key>" (Bullet: how
+  // many concave grain shapes it collides as convex pieces).
+  virtual std::map<std::string, double> summary_figures() const { return {}; }
 
   // Checkpoints (scenarios/Checkpoint.h): the engine's own state beyond what the grain
   // records carry (contact history, velocities at half steps, exact orientations, the

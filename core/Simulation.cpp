@@ -376,6 +376,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
   sum.extra["guard_small_grains_removed"] = static_cast<double>(guard_max_.small_grains_removed);
+  for (const auto& [key, value] : engine_->summary_figures()) sum.extra["engine_" + key] = value;
   if (solver_.steps > 0) {
     const double limited = static_cast<double>(solver_.limited) / static_cast<double>(solver_.steps);
     sum.extra["engine_solver_iterations_max"] = solver_.iterations_max;

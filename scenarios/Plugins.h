@@ -24,7 +24,8 @@ namespace crumble {
 // 2: BreakageAnalysis, named strength values, model-owned screening.
 // 3: RegistryEntry::options (core/Options.h), the implementation's declared option table.
 // 4: BreakageModel::load_measure, BreakageAnalysis::points.
-inline constexpr int kPluginAbi = 4;
+// 5: Engine::summary_figures, BreakageModel::set_analysis_threads (added without a bump).
+inline constexpr int kPluginAbi = 5;
 
 struct PluginRegistrar {
   Table<EngineFactory>& engines;
