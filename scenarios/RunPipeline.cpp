@@ -141,11 +141,13 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
 // stop: the time step schedule, the contact solver's settings (iterations, Bullet's tolerance,
 // residual and deep-penetration correction) and the guards themselves
 // (they only check the state; a smaller step or a better converged contact solution from the
-// last checkpoint on is how a stopped run goes on).
+// last checkpoint on is how a stopped run goes on); and how Bullet collides concave grains
+// (so a run from before their convex pieces can go on with them, or be compared both ways).
 const std::set<std::string> kResumeMayDiffer = {
     "/threads",         "/simulation/max_steps",   "/output/checkpoint_every_s", "/time_step",
     "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/engine/deep_penetration",
-    "/engine/deep_erp",         "/simulation/guards"};
+    "/engine/deep_erp",         "/simulation/guards", "/engine/concave_shapes", "/engine/concavity_tolerance",
+    "/engine/max_convex_pieces"};
 
 // Appends {"path", "was", "now"} for every leaf (or whole value, where the types differ) in
 // which `was` and `now` differ below `path`.
@@ -208,7 +210,8 @@ Json check_resumable(const std::string& out, const Json& effective) {
                    ", now " + show(effective) +
                    "); a resumed run must use the same effective scenario (only /threads, "
                    "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations, "
-                   "/engine/solver_tolerance, /engine/solver_residual, /engine/deep_penetration, /engine/deep_erp and "
+                   "/engine/solver_tolerance, /engine/solver_residual, /engine/deep_penetration, /engine/deep_erp, "
+                   "/engine/concave_shapes, /engine/concavity_tolerance, /engine/max_convex_pieces and "
                    "/simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }

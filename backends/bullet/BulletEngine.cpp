@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <unordered_set>
 #include <cmath>
+#include <exception>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -18,6 +20,7 @@
 
 #include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
+#include "geometry/ConvexPieces.h"
 #include "core/Platen.h"
 
 // Mixing the float and double builds of Bullet corrupts memory silently (METHODS.md §2).
@@ -95,6 +98,9 @@ Quat quat(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
 // Bullet data shared by every grain of one Shape.
 struct ShapeEntry {
   Shape::Ptr shape;
+  // A concave polyhedron's convex pieces (btCompoundShape children; declared before
+  // `collision` so the compound goes first).
+  std::vector<std::unique_ptr<btConvexHullShape>> pieces;
   std::unique_ptr<btCollisionShape> collision;
   Quat principal;         // principal frame → shape frame
   Vec3 centroid;          // shape frame (≈ 0 by Shape's invariant)
@@ -245,6 +251,9 @@ struct BulletEngine::Impl {
 
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
   std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
+  long compound_shapes = 0;  // concave polyhedra collided as convex pieces (shapes, not grains)
+  long compound_pieces = 0;
+  long compound_failures = 0;  // concave polyhedra collided as their hull because the cutting failed
   double total_mass = 0;  // kg, physical
   double last_dt = 0;
   double friction_scale = 1;  // set_friction_scale
@@ -460,31 +469,67 @@ struct BulletEngine::Impl {
     const double d = shape->equivalent_diameter();
     if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
       e->collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
-    } else {
-      // Bullet inflates a hull by its margin: inset the hull by the same amount so the
-      // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer
-      // to a face than twice the margin gets a smaller margin; a flat hull (its centroid on
-      // or, by rounding, outside a face) gets none and is taken as it is.
-      const TriMesh& hull = shape->convex_hull();
-      const double inradius = convex_inradius_about_centroid(hull);
-      double margin = 0;
-      if (inradius > 0 && std::isfinite(inradius)) margin = std::min(opt.margin_fraction * d, 0.5 * inradius);
-      const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(hull, margin) : hull.vertices;
-      const Quat to_principal = e->principal.conjugate();
-      std::vector<btScalar> pts;
-      pts.reserve(3 * inset.size());
-      for (const auto& v : inset) {
-        const Vec3 p = to_principal.rotate(v - e->centroid) * scale;
-        pts.insert(pts.end(), {p.x, p.y, p.z});
+    } else if (shape->kind() == ShapeKind::Polyhedron && opt.convex_pieces) {
+      // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
+      // concave in the engine) collides as convex pieces whose hulls cover it; a convex one
+      // (within concavity_tolerance of its hull) as its hull, as below.
+      ConvexPiecesOptions po;
+      po.tolerance = opt.concavity_tolerance;
+      po.max_pieces = opt.max_convex_pieces;
+      ConvexPieces cp;
+      try {
+        cp = convex_pieces(shape->mesh(), po);
+      } catch (const std::exception& ex) {
+        // Not expected (the pieces' cuts are guarded against degenerate hulls); said once and
+        // counted rather than stopping a long run for one fragment.
+        if (compound_failures++ == 0)
+          std::cerr << "crumble: warning: bullet: a concave grain could not be cut into convex pieces ("
+                    << ex.what() << "); it collides as its convex hull (counted in summary.json: "
+                    << "engine_compound_failures)\n";
       }
-      auto hs = std::make_unique<btConvexHullShape>(pts.data(), static_cast<int>(inset.size()),
-                                                    static_cast<int>(3 * sizeof(btScalar)));
-      hs->setMargin(to_int(margin));
-      hs->recalcLocalAabb();
-      e->collision = std::move(hs);
+      if (cp.pieces.size() < 2) {
+        e->collision = hull_shape(shape->convex_hull(), d, *e);
+      } else {
+        auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(cp.pieces.size()));
+        btTransform identity;
+        identity.setIdentity();
+        for (const auto& piece : cp.pieces) {
+          e->pieces.push_back(hull_shape(convex_hull(piece), d, *e));
+          compound->addChildShape(identity, e->pieces.back().get());
+        }
+        e->collision = std::move(compound);
+        ++compound_shapes;
+        compound_pieces += static_cast<long>(cp.pieces.size());
+      }
+    } else {
+      e->collision = hull_shape(shape->convex_hull(), d, *e);
     }
     shape_cache[shape.get()] = e;
     return e;
+  }
+
+  // A convex hull (shape frame) as Bullet's hull in the principal frame of `e`, in internal
+  // units. Bullet inflates a hull by its margin: inset the hull by the same amount so the
+  // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer to a
+  // face than twice the margin gets a smaller margin; a flat hull (its centroid on or, by
+  // rounding, outside a face) gets none and is taken as it is.
+  std::unique_ptr<btConvexHullShape> hull_shape(const TriMesh& hull, double d, const ShapeEntry& e) const {
+    const double inradius = convex_inradius_about_centroid(hull);
+    double margin = 0;
+    if (inradius > 0 && std::isfinite(inradius)) margin = std::min(opt.margin_fraction * d, 0.5 * inradius);
+    const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(hull, margin) : hull.vertices;
+    const Quat to_principal = e.principal.conjugate();
+    std::vector<btScalar> pts;
+    pts.reserve(3 * inset.size());
+    for (const auto& v : inset) {
+      const Vec3 p = to_principal.rotate(v - e.centroid) * scale;
+      pts.insert(pts.end(), {p.x, p.y, p.z});
+    }
+    auto hs = std::make_unique<btConvexHullShape>(pts.data(), static_cast<int>(inset.size()),
+                                                  static_cast<int>(3 * sizeof(btScalar)));
+    hs->setMargin(to_int(margin));
+    hs->recalcLocalAabb();
+    return hs;
   }
 
   btTransform body_transform(const ShapeEntry& e, const Vec3& position, const Quat& orientation) const {
@@ -768,6 +813,14 @@ const OptionTable& bullet_options() {
                     "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
         opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
         opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (Zhu & Zhao 2019 §5 use 70)"),
+        opt::choice("concave_shapes", d.convex_pieces ? "convex_pieces" : "convex_hull", {"convex_pieces", "convex_hull"},
+                    "a concave polyhedral grain (a fragment kept concave, Zhu & Zhao 2019 §3.2) collides as convex pieces "
+                    "that cover it (btCompoundShape), or as its convex hull (more solid than the grain, contacts over its "
+                    "concavities)"),
+        opt::number("concavity_tolerance", d.concavity_tolerance, 0, 1, "",
+                    "convex_pieces: a polyhedron whose hull exceeds its volume by more than this fraction is cut into "
+                    "pieces until their hulls do (or max_convex_pieces)"),
+        opt::integer("max_convex_pieces", d.max_convex_pieces, 1, 64, "convex pieces of one concave grain at most"),
     };
   }();
   return t;
@@ -787,6 +840,9 @@ BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
   o.deep_penetration = r.number("deep_penetration");
   o.deep_erp = r.number("deep_erp");
   o.mass_scale = r.number("mass_scale");
+  o.convex_pieces = r.string("concave_shapes") == "convex_pieces";
+  o.concavity_tolerance = r.number("concavity_tolerance");
+  o.max_convex_pieces = static_cast<int>(r.integer("max_convex_pieces"));
   return o;
 }
 
@@ -827,6 +883,12 @@ double BulletEngine::wall_force(int wall) const {
 }
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
+std::map<std::string, double> BulletEngine::summary_figures() const {
+  return {{"compound_shapes", static_cast<double>(impl_->compound_shapes)},
+          {"compound_pieces", static_cast<double>(impl_->compound_pieces)},
+          {"compound_failures", static_cast<double>(impl_->compound_failures)}};
+}
+
 Engine::SolverReport BulletEngine::solver_report() const {
   const ToleranceSolver& s = *impl_->solver;
   SolverReport r;

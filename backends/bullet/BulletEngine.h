@@ -73,6 +73,9 @@ class BulletEngine final : public Engine {
     double deep_penetration = 0;  // fraction of the first grain's d; 0 = off
     double deep_erp = 0.2;
     double mass_scale = 1;
+    bool convex_pieces = true;         // "concave_shapes": "convex_pieces" (else "convex_hull")
+    double concavity_tolerance = 0.02;  // "concavity_tolerance"
+    int max_convex_pieces = 8;         // "max_convex_pieces"
   };
   static Options read_options(const Config& cfg);
 
@@ -94,6 +97,7 @@ class BulletEngine final : public Engine {
   double floor_force() const override;
   double wall_force(int wall) const override;
   SolverReport solver_report() const override;
+  std::map<std::string, double> summary_figures() const override;
 
   // Diagnostics.
   double length_scale() const;             // internal units per metre (0 until fixed)

@@ -87,6 +87,8 @@ class OdeEngine final : public Engine {
   double platen_force() const override;
   double floor_force() const override;
   double wall_force(int wall) const override;
+  // "concave_shapes_as_hull": concave polyhedra (hull > 1.02 × volume) collided as their hull.
+  std::map<std::string, double> summary_figures() const override;
 
   double length_scale() const;  // internal units per metre (0 until fixed)
 

@@ -15,6 +15,7 @@
 #include "geometry/SymmetricEigen.h"
 #include "core/Config.h"
 #include "scenarios/Registry.h"
+#include "tests/support/Meshes.h"
 
 using namespace crumble;
 using nlohmann::json;
@@ -260,4 +261,39 @@ TEST(BulletEngine, DeepPenetrationIsPushedApartWithoutSpeed) {
   // The speed comes from eq. 8 on the depth left below the threshold (half of it): the deep
   // correction itself adds none (as a velocity bias at β = 0.2 it would give ≈ 0.8 m/s).
   EXPECT_LT(deep_speed, 0.6 * plain_speed) << deep_speed << " against " << plain_speed;
+}
+
+// A concave grain collides as convex pieces that cover it, not as its hull (Zhu & Zhao 2019
+// §3.2 keep such fragments concave in the engine): a 0.6 mm sphere dropped into the notch of a
+// U-shaped grain (3 × 3 × 2 mm, a 1 mm notch 1 mm deep) comes to rest on the notch's bottom,
+// and its contact point lies on the grain's surface. As the hull, it rests on the hull's top
+// face, 1 mm higher, over the notch: no material of the grain is there.
+TEST(BulletEngine, AConcaveGrainCollidesAsConvexPieces) {
+  const TriMesh m = testing_support::u_prism(3.0, 1e-3);
+  const auto u = Shape::polyhedron(m);  // centred: the centroid is 0.9 mm above the base
+  auto drop = [&](const char* mode, double* contact_offset) {
+    auto e = make_engine({{"concave_shapes", mode}, {"solver_iterations", 50}});
+    e->set_container({20e-3, 20e-3, 20e-3, 0});
+    const Grain cup = grain(0, u, {10e-3, 10e-3, 0.9e-3}), ball = grain(1, Shape::sphere(0.3e-3), {10e-3, 10e-3, 3e-3});
+    e->add_grain(cup);
+    e->add_grain(ball);
+    run(*e, 4000);
+    const Grain c = state_of(*e, cup), b = state_of(*e, ball);
+    *contact_offset = -1;
+    for (const auto& k : e->contacts())
+      if (k.wall < 0) {
+        const Vec3 local = c.orientation.conjugate().rotate(k.point - c.position);
+        *contact_offset = std::max(*contact_offset, std::abs(u->signed_distance(local)));
+      }
+    EXPECT_EQ(e->summary_figures().at("compound_shapes"), std::string(mode) == "convex_pieces" ? 1.0 : 0.0);
+    return b.position.z - c.position.z + 0.9e-3;  // the ball's centre above the cup's base
+  };
+  double offset_pieces = 0, offset_hull = 0;
+  const double z_pieces = drop("convex_pieces", &offset_pieces);
+  const double z_hull = drop("convex_hull", &offset_hull);
+  EXPECT_NEAR(z_pieces, 1.3e-3, 0.05e-3);  // notch bottom (1 mm) + radius
+  EXPECT_NEAR(z_hull, 2.3e-3, 0.05e-3);    // hull top (2 mm) + radius
+  EXPECT_GE(offset_pieces, 0);
+  EXPECT_LT(offset_pieces, 0.03e-3);  // on the grain's surface, within the margins
+  EXPECT_GT(offset_hull, 0.4e-3);     // over the notch: 0.5 mm from its walls
 }
