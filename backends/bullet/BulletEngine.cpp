@@ -478,7 +478,10 @@ struct BulletEngine::Impl {
       po.max_pieces = opt.max_convex_pieces;
       ConvexPieces cp;
       try {
-        cp = convex_pieces(shape->mesh(), po);
+        // Most children are hulls already: cut only what is concave (the same test convex_pieces
+        // starts with, on the shape's cached hull).
+        if (polyhedron_mass_properties(shape->convex_hull()).volume > (1 + po.tolerance) * shape->volume())
+          cp = convex_pieces(shape->mesh(), po);
       } catch (const std::exception& ex) {
         // Not expected (the pieces' cuts are guarded against degenerate hulls); said once and
         // counted rather than stopping a long run for one fragment.
