@@ -78,6 +78,26 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
   return r;
 }
 
+std::vector<std::pair<const char*, long>> ScreeningCounts::items() const {
+  return {{"too_small", too_small},         {"few_contacts", few_contacts},
+          {"below_threshold", below_threshold}, {"unbalanced_force", unbalanced_force},
+          {"unbalanced_moment", unbalanced_moment}, {"selected", selected}};
+}
+
+long* ScreeningCounts::find(std::string_view reason) {
+  if (reason == "too_small") return &too_small;
+  if (reason == "few_contacts") return &few_contacts;
+  if (reason == "below_threshold") return &below_threshold;
+  if (reason == "unbalanced_force") return &unbalanced_force;
+  if (reason == "unbalanced_moment") return &unbalanced_moment;
+  if (reason == "selected") return &selected;
+  return nullptr;
+}
+
+void ScreeningCounts::add(const ScreeningResult& r) {
+  if (long* c = find(r.reason)) ++*c;
+}
+
 const OptionTable& screening_options() {
   static const OptionTable t = [] {
     OptionSpec s = opt::number(

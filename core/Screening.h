@@ -4,6 +4,8 @@
 // the struct's own defaults switch every rule off but the contact count.
 #pragma once
 #include <span>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/Contact.h"
@@ -38,10 +40,21 @@ ScreeningSettings zhu_zhao_screening();
 
 struct ScreeningResult {
   bool selected = false;
-  const char* reason = "";  // why not: too_small, no_contacts, below_threshold, unbalanced_force, ...
+  const char* reason = "";  // why not: too_small, few_contacts, below_threshold, unbalanced_force, ...
   double max_force = 0;
   double unbalanced_force_ratio = 0;
   double unbalanced_moment_ratio = 0;
+};
+
+// Grain checks per screening outcome, over a run (summary.json screening_<reason>; a
+// checkpoint keeps them): which rule turned grains away, and how many it let through.
+struct ScreeningCounts {
+  long too_small = 0, few_contacts = 0, below_threshold = 0, unbalanced_force = 0, unbalanced_moment = 0;
+  long selected = 0;  // passed every rule (the skip rule may still spare the analysis)
+  void add(const ScreeningResult& r);
+  // (reason, count) in the order of the rules.
+  std::vector<std::pair<const char*, long>> items() const;
+  long* find(std::string_view reason);
 };
 
 // `contacts` are the contacts on `g` (force on g). Zhu & Zhao 2019 §5: unbalanced force ratio =

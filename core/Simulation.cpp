@@ -93,6 +93,7 @@ SimulationState Simulation::saved_state() const {
   s.events = events_;
   s.analyses = analyses_;
   s.analyses_skipped = analyses_skipped_;
+  s.screened = screened_;
   s.fallbacks = fallbacks_;
   s.dt_reductions = dt_reductions_;
   s.next_id = next_id_;
@@ -131,6 +132,7 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   events_ = st.events;
   analyses_ = st.analyses;
   analyses_skipped_ = st.analyses_skipped;
+  screened_ = st.screened;
   fallbacks_ = st.fallbacks;
   dt_reductions_ = st.dt_reductions;
   next_id_ = st.next_id;
@@ -369,6 +371,7 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.breakage_events = events_;
   sum.analyses = analyses_;
   sum.analyses_skipped = analyses_skipped_;
+  for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
@@ -409,7 +412,9 @@ void Simulation::check_breakage(const RunState& st) {
   std::vector<std::size_t> candidates;
   std::vector<std::vector<PartnerForce>> loads;  // per candidate, what its analysis is given
   for (std::size_t i = 0; i < grains_.size(); ++i) {
-    if (!screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i])).selected) continue;
+    const ScreeningResult sr = screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i]));
+    screened_.add(sr);
+    if (!sr.selected) continue;
     std::vector<PartnerForce> now = partner_forces(grains_[i], on[i]);
     if (skip_analysis(grains_[i], now, screening_)) {
       ++analyses_skipped_;

@@ -48,6 +48,7 @@ struct SimulationState {
   double removed_volume = 0, removed_mass = 0;
   long events = 0, analyses = 0, fallbacks = 0, dt_reductions = 0;
   long analyses_skipped = 0;  // screened in but skipped by the skip rule (Screening.h)
+  ScreeningCounts screened;   // grain checks per screening outcome
   GrainId next_id = 0;
   double schedule_last_stress = 0;
   std::size_t grains_initial = 0;
@@ -164,6 +165,7 @@ class Simulation {
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;
+  ScreeningCounts screened_;
   Timings timings_;
   bool resumed_ = false;
   const std::atomic<bool>* stop_ = nullptr;

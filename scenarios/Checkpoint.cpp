@@ -133,6 +133,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"platen_stress", st.platen_stress},
                 {"guard_max_overlap_fraction", st.guard_max_overlap_fraction},
                 {"guard_max_energy_ratio", st.guard_max_energy_ratio}};
+  for (const auto& [reason, n] : st.screened.items()) j["state"][std::string("screened_") + reason] = n;
   // Shared shapes are written once.
   std::map<const Shape*, std::size_t> index;
   Json shapes = Json::array(), grains = Json::array();
@@ -210,6 +211,8 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.platen_stress = s.number("platen_stress", -1);
   st.guard_max_overlap_fraction = s.number("guard_max_overlap_fraction", 0, 0);
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
+  for (const auto& [reason, n] : ScreeningCounts{}.items())  // absent in older checkpoints: 0
+    *st.screened.find(reason) = s.integer(std::string("screened_") + reason, 0, 0);
   std::vector<Shape::Ptr> shapes;
   for (auto& sc : c.children("shapes")) {
     Shape::Ptr sh = shape_from_saved_config(sc, dim);

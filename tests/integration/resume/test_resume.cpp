@@ -122,6 +122,11 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   EXPECT_EQ(sb["resumed_from_step"].get<long>() % 500, 0);
   EXPECT_GE(sb["resumed_from_step"].get<long>(), 500);
   EXPECT_LE(sb["resumed_from_step"].get<long>(), kill_step + 500);
+  // The screening tally goes on from the checkpoint's (Simulation::saved_state).
+  ASSERT_GT(sa["screening_selected"].get<double>(), 0);
+  for (const char* k : {"screening_too_small", "screening_few_contacts", "screening_below_threshold",
+                        "screening_unbalanced_force", "screening_unbalanced_moment", "screening_selected"})
+    EXPECT_EQ(sa[k], sb[k]) << k;
 
   ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;  // no .part left
   for (const auto& f : files_under(whole)) {

@@ -125,6 +125,33 @@ ScreeningSettings skipping(double tol) {
 }  // namespace
 
 // Per partner, summed over its contact points, in the body frame, walls keyed -1 - wall.
+// Each rule's outcome is counted under its own name (summary.json screening_<reason>).
+TEST(Screening, CountsEachOutcomeUnderItsRule) {
+  ScreeningCounts n;
+  const Loaded g = grain(2e-3, 80);
+  const std::vector<Contact> pair{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0, 0, -1e-3}, {0, 0, 100})};
+  n.add(screen(g, pair, kZhuZhao));
+  n.add(screen(g, pair, kZhuZhao));
+  n.add(screen(grain(0.2e-3, 80), pair, kZhuZhao));
+  n.add(screen(g, std::vector<Contact>{pair[0]}, kZhuZhao));
+  n.add(screen(grain(2e-3, 150), pair, kZhuZhao));
+  n.add(screen(g, std::vector<Contact>{pair[0], contact({0, 0, -1e-3}, {0, 0, 97})}, kZhuZhao));
+  n.add(screen(g, std::vector<Contact>{pair[0], contact({0.5e-3, 0, -1e-3}, {0, 0, 100})}, kZhuZhao));
+  EXPECT_EQ(n.selected, 2);
+  EXPECT_EQ(n.too_small, 1);
+  EXPECT_EQ(n.few_contacts, 1);
+  EXPECT_EQ(n.below_threshold, 1);
+  EXPECT_EQ(n.unbalanced_force, 1);
+  EXPECT_EQ(n.unbalanced_moment, 1);
+  long total = 0;
+  for (const auto& [reason, count] : n.items()) {
+    EXPECT_EQ(*n.find(reason), count) << reason;
+    total += count;
+  }
+  EXPECT_EQ(total, 7);
+  EXPECT_EQ(n.find("no_such_rule"), nullptr);
+}
+
 TEST(SkipRule, PartnerForcesAreSummedPerPartnerInTheBodyFrame) {
   std::vector<Contact> cs{contact({0, 0, 1e-3}, {10, 0, -100}), contact({1e-4, 0, 1e-3}, {0, 0, -20}),
                           floor_contact({-10, 0, 120})};

@@ -408,6 +408,9 @@ TEST(SimulationLoop, SkipRuleAnalysesAgainOnlyWhenTheLoadGrew) {
   for (std::size_t k = 0; k < expect.size(); ++k) EXPECT_NEAR(on.loads[k], expect[k], 1e-6) << k;
   EXPECT_EQ(on.sum.analyses, 3 * static_cast<long>(expect.size()));
   EXPECT_EQ(on.sum.analyses + on.sum.analyses_skipped, off.sum.analyses);  // every screened-in check is one or the other
+  // The screening tally counts the grains that passed the rules, analysed or skipped.
+  EXPECT_EQ(off.sum.extra.at("screening_selected"), static_cast<double>(off.sum.analyses));
+  EXPECT_EQ(on.sum.extra.at("screening_selected"), static_cast<double>(on.sum.analyses + on.sum.analyses_skipped));
 }
 
 namespace {
