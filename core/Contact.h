@@ -16,6 +16,9 @@ struct Contact {
   Vec3 point;
   Vec3 normal;
   Vec3 force;
+  // A couple (N·m) on `a` at this contact besides `force` at `point`: Bullet's rolling (and
+  // spinning) resistance. Zero where the engine has none.
+  Vec3 torque;
   // Deepest interpenetration of the two surfaces (m, >= 0) as the engine sees it; the
   // Simulation's guards compare it with the smaller grain's size.
   double overlap = 0;

@@ -58,6 +58,7 @@ ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const 
   Vec3 msum;
   double mscale = 0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
+    msum += contacts[i].torque;  // rolling resistance: a couple, the same about any point
     if (i == imax) continue;
     const Vec3 arm = contacts[i].point - fix;
     msum += cross(arm, contacts[i].force);
@@ -163,6 +164,7 @@ std::vector<std::vector<Contact>> contacts_by_grain(std::span<const Grain> grain
         std::swap(r.a, r.b);
         r.normal = -c.normal;
         r.force = -c.force;
+        r.torque = -c.torque;
         on[ib->second].push_back(r);
       }
     }

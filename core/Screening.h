@@ -58,9 +58,12 @@ struct ScreeningCounts {
 };
 
 // `contacts` are the contacts on `g` (force on g). Zhu & Zhao 2019 §5: unbalanced force ratio =
-// |Σ F| / mean |F|; unbalanced moment ratio = |Σ (x − x_fix) × F| / mean |x − x_fix|·|F|
+// |Σ F| / mean |F|; unbalanced moment ratio = |Σ (x − x_fix) × F + Σ τ| / mean |x − x_fix|·|F|
 // about the point of the largest force (the zone a peridynamic analysis fixes) — the paper
-// says "average magnitude of moment"; see Screening.cpp for why the lever-arm form. Gravity
+// says "average magnitude of moment"; see Screening.cpp for why the lever-arm form. τ are the
+// contacts' couples (Contact::torque, rolling resistance): a grain that rolling resistance
+// holds still is not in motion, and leaving them out flagged most loaded grains of a packing
+// as moving (docs/validation.md, "The unbalanced-moment filter"). Gravity
 // is left out: at the forces that break grains it is < 1e-4 of them. `threshold_force` (N)
 // is the model's screening force for g (BreakageModel::threshold_force).
 ScreeningResult screen(const Grain& g, std::span<const Contact> contacts, const ScreeningSettings& s,

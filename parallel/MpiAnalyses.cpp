@@ -164,6 +164,7 @@ void put_contact(Writer& w, const Contact& c) {
   w.vec(c.point);
   w.vec(c.normal);
   w.vec(c.force);
+  w.vec(c.torque);
   w.put(c.overlap);
 }
 
@@ -175,6 +176,7 @@ Contact get_contact(Reader& r) {
   c.point = r.vec();
   c.normal = r.vec();
   c.force = r.vec();
+  c.torque = r.vec();
   c.overlap = r.get<double>();
   return c;
 }

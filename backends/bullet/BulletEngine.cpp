@@ -9,6 +9,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
+#include <unordered_map>
 #include <unordered_set>
 #include <cmath>
 #include <exception>
@@ -203,6 +204,29 @@ class ToleranceSolver : public btSequentialImpulseConstraintSolver {
   }
 
   std::vector<double> previous_;
+
+ public:
+  // Angular impulse on body0 of each contact point's rolling and spinning rows in the last
+  // solve (internal units). Bullet writes the normal and friction impulses back to the
+  // manifold point but not these: they are read from the solver's pools before it clears
+  // them. Cleared before each step (BulletEngine::step).
+  std::unordered_map<const btManifoldPoint*, btVector3> rolling;
+
+ protected:
+  btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
+                                         const btContactSolverInfo& info) override {
+    const btConstraintArray& rows = m_tmpSolverContactRollingFrictionConstraintPool;
+    for (int i = 0; i < rows.size(); ++i) {
+      const btSolverConstraint& c = rows[i];
+      // m_frictionIndex: the contact row of the same point (convertContact); the torque axis on
+      // body0 is m_relpos1CrossNormal (setupTorsionalFrictionConstraint).
+      const auto* cp =
+          static_cast<const btManifoldPoint*>(m_tmpSolverContactConstraintPool[c.m_frictionIndex].m_originalContactPoint);
+      auto [it, fresh] = rolling.try_emplace(cp, 0, 0, 0);
+      it->second += c.m_relpos1CrossNormal * c.m_appliedImpulse;
+    }
+    return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, info);
+  }
 };
 
 struct GrainBody {
@@ -673,6 +697,7 @@ struct BulletEngine::Impl {
     last_dt = dt;
     solver->max_iterations = 0;
     solver->max_change = 0;
+    solver->rolling.clear();
     world->stepSimulation(dt, 0);  // exactly one internal step of dt
     if (platen_dynamic) driver.sync(current_platen_z(), p->getLinearVelocity().z() / scale);
   }
@@ -717,7 +742,7 @@ struct BulletEngine::Impl {
       const BodyTag* t0 = tag_of(m->getBody0());
       const BodyTag* t1 = tag_of(m->getBody1());
       if (!t0 || !t1 || (t0->wall >= 0 && t1->wall >= 0)) continue;
-      btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), mid_sum(0, 0, 0);
+      btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), mid_sum(0, 0, 0), couple(0, 0, 0);
       double jn = 0, depth = 0;
       for (int k = 0; k < np; ++k) {
         const btManifoldPoint& p = m->getContactPoint(k);
@@ -725,6 +750,7 @@ struct BulletEngine::Impl {
         const btVector3 mid = 0.5 * (p.getPositionWorldOnA() + p.getPositionWorldOnB());
         j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
              p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
+        if (const auto r = solver->rolling.find(&p); r != solver->rolling.end()) couple += r->second;
         const double w = std::max(p.m_appliedImpulse, btScalar(0));
         point += mid * w;
         normal += p.m_normalWorldOnB * w;
@@ -752,6 +778,7 @@ struct BulletEngine::Impl {
       }
       const double sgn = flip ? -1.0 : 1.0;
       c.force = vec(j) * (sgn / (scale * last_dt));
+      c.torque = vec(couple) * (sgn / (scale * scale * last_dt));
       c.normal = vec(normal) * sgn;
       c.point = vec(point) / scale;
       c.overlap = depth / scale;

@@ -754,11 +754,15 @@ struct OdeEngine::Impl {
         i = j;
         continue;
       }
-      Vec3 f, point, normal;
+      Vec3 f, point, normal, couple;
       double fn_sum = 0, depth = 0;
       for (std::size_t k = i; k < j; ++k) {
         const PointRec& r = recs[k];
         const Vec3 fk = vec(r.fb.f1);
+        // The joint's torque on the grain about its centre, less the moment of its force: the
+        // rolling-resistance couple (dContactRolling).
+        if (const dBodyID b = dGeomGetBody(r.contact.geom.g1))
+          couple = couple + vec(r.fb.t1) - cross(vec(r.contact.geom.pos) - vec(dBodyGetPosition(b)), fk);
         const Vec3 nk = vec(r.contact.geom.normal);
         const double fn = std::max(dot(fk, nk), 0.0);
         f = f + fk;
@@ -782,6 +786,7 @@ struct OdeEngine::Impl {
       }
       const double sgn = flip ? -1.0 : 1.0;
       c.force = f * (sgn / scale);
+      c.torque = couple * (sgn / (scale * scale));
       c.normal = normalized(normal) * sgn;
       c.point = point / (fn_sum * scale);
       c.overlap = depth / scale;
