@@ -19,6 +19,10 @@ struct ScreeningSettings {
   bool force_threshold = true;             // require max |F| >= the model's threshold_force(grain)
   double max_unbalanced_force_ratio = 0;   // <= 0 disables
   double max_unbalanced_moment_ratio = 0;  // <= 0 disables
+  // Count the contacts' couples (Contact::torque: rolling resistance) in the unbalanced
+  // moment. false: the moments of the contact forces only (Zhu & Zhao's default, see
+  // zhu_zhao_screening; a grain held by rolling resistance then reads as turning).
+  bool moment_couples = true;
   int min_contacts = 1;
   // Skip rule (crumble's, not Zhu & Zhao's): a grain that passes the rules above but whose
   // last analysis left it whole is not analysed again while the force of every contact
@@ -35,7 +39,8 @@ struct ScreeningSettings {
 const OptionTable& screening_options();
 
 // Zhu & Zhao 2019, §5: crushing limit 0.3 mm, unbalanced-force ratio <= 0.02,
-// unbalanced-moment ratio <= 0.2, at least two contacts, force threshold on.
+// unbalanced-moment ratio <= 0.2 (of the contact forces' moments only: moment_couples
+// false), at least two contacts, force threshold on.
 ScreeningSettings zhu_zhao_screening();
 
 struct ScreeningResult {

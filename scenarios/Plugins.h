@@ -25,7 +25,7 @@ namespace crumble {
 // 3: RegistryEntry::options (core/Options.h), the implementation's declared option table.
 // 4: BreakageModel::load_measure, BreakageAnalysis::points.
 // 5: Engine::summary_figures, BreakageModel::set_analysis_threads (added without a bump).
-// 6: Contact::torque (core/Contact.h).
+// 6: Contact::torque (core/Contact.h), ScreeningSettings::moment_couples.
 inline constexpr int kPluginAbi = 6;
 
 struct PluginRegistrar {

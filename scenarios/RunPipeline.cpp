@@ -147,7 +147,7 @@ const std::set<std::string> kResumeMayDiffer = {
     "/threads",         "/simulation/max_steps",   "/output/checkpoint_every_s", "/time_step",
     "/engine/solver_iterations", "/engine/solver_tolerance", "/engine/solver_residual", "/engine/deep_penetration",
     "/engine/deep_erp",         "/simulation/guards", "/engine/concave_shapes", "/engine/concavity_tolerance",
-    "/engine/max_convex_pieces"};
+    "/engine/max_convex_pieces", "/screening/moment_couples"};
 
 // Appends {"path", "was", "now"} for every leaf (or whole value, where the types differ) in
 // which `was` and `now` differ below `path`.
@@ -211,8 +211,8 @@ Json check_resumable(const std::string& out, const Json& effective) {
                    "); a resumed run must use the same effective scenario (only /threads, "
                    "/simulation/max_steps, /output/checkpoint_every_s, /time_step, /engine/solver_iterations, "
                    "/engine/solver_tolerance, /engine/solver_residual, /engine/deep_penetration, /engine/deep_erp, "
-                   "/engine/concave_shapes, /engine/concavity_tolerance, /engine/max_convex_pieces and "
-                   "/simulation/guards may change). Use the same file and --set options, or start a new run "
+                   "/engine/concave_shapes, /engine/concavity_tolerance, /engine/max_convex_pieces, "
+                   "/screening/moment_couples and /simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
 }
 

@@ -296,6 +296,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   scr.max_unbalanced_force_ratio = scrc.number("max_unbalanced_force_ratio", scr.max_unbalanced_force_ratio);
   scr.max_unbalanced_moment_ratio = scrc.number("max_unbalanced_moment_ratio", scr.max_unbalanced_moment_ratio);
   scr.min_contacts = static_cast<int>(scrc.integer("min_contacts", scr.min_contacts, 1));
+  scr.moment_couples = scrc.boolean("moment_couples", scr.moment_couples);
   scr.skip_intact_tolerance = Options(scrc, screening_options()).number("skip_intact_tolerance", scr.skip_intact_tolerance);
 
   Config oc = root.child("output");

@@ -89,17 +89,25 @@ TEST(Screening, UnbalancedMoment) {
   EXPECT_NEAR(r.unbalanced_moment_ratio, 0.5 / std::sqrt(0.25 + 4.0), 1e-12);
 }
 
-// A couple at a contact (rolling resistance, Contact::torque) is part of the moment balance:
-// the offset pair above, held by a couple that cancels its moment, is not in motion.
+// A couple at a contact (rolling resistance, Contact::torque) is part of the moment balance
+// when moment_couples is on: the offset pair above, held by a couple that cancels its moment,
+// is not in motion. Zhu & Zhao's default leaves the couples out (Screening.cpp).
 TEST(Screening, ContactCouplesBalanceTheMoment) {
   const Loaded g = grain(2e-3, 80);
   std::vector<Contact> cs{contact({0, 0, 1e-3}, {0, 0, -100}), contact({0.5e-3, 0, -1e-3}, {0, 0, 100})};
   cs[1].torque = {0, 0.5e-3 * 100, 0};  // the moment of the second force about the first is (0, -0.05, 0) N·m
-  auto r = screen(g, cs, kZhuZhao);
+  ScreeningSettings couples = kZhuZhao;
+  couples.moment_couples = true;
+  auto r = screen(g, cs, couples);
   EXPECT_TRUE(r.selected) << r.reason << " " << r.unbalanced_moment_ratio;
   EXPECT_LT(r.unbalanced_moment_ratio, 1e-12);
+  // Zhu & Zhao's default: the moments of the forces only.
+  EXPECT_FALSE(kZhuZhao.moment_couples);
+  EXPECT_STREQ(screen(g, cs, kZhuZhao).reason, "unbalanced_moment");
+  EXPECT_NEAR(screen(g, cs, kZhuZhao).unbalanced_moment_ratio, 0.5 / std::sqrt(0.25 + 4.0), 1e-12);
   cs[1].torque = -cs[1].torque;  // a couple the other way doubles it
-  EXPECT_NEAR(screen(g, cs, kZhuZhao).unbalanced_moment_ratio, 2 * 0.5 / std::sqrt(0.25 + 4.0), 1e-12);
+  EXPECT_NEAR(screen(g, cs, couples).unbalanced_moment_ratio, 2 * 0.5 / std::sqrt(0.25 + 4.0), 1e-12);
+  EXPECT_TRUE(ScreeningSettings{}.moment_couples);  // every other model's default
 }
 
 TEST(Screening, NearlyCollinearPairIsBalanced) {
