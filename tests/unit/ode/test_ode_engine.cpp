@@ -13,6 +13,7 @@
 #include "backends/ode/OdeEngine.h"
 #include "core/Config.h"
 #include "scenarios/Registry.h"
+#include "tests/support/RollingCouple.h"
 
 using namespace crumble;
 using nlohmann::json;
@@ -134,15 +135,8 @@ TEST(OdeEngine, RollingFrictionIsALeverArmInTheInternalUnit) {
   g.angular_velocity = {0, v0 / r, 0};
   e->add_grain(g);
   EXPECT_EQ(e->length_scale(), 500.0);
-  // While it rolls, the floor contact carries the rolling-resistance couple at its limit,
-  // μr·L·N, against the spin (Contact::torque; the screening's moment balance counts it).
-  run(*e, 200);
-  const std::vector<Contact> cs = e->contacts();
-  ASSERT_EQ(cs.size(), 1u);
-  const double couple = mat.rolling_friction * (1 / 500.0) * norm(cs[0].force);
-  EXPECT_NEAR(cs[0].torque.y, -couple, 0.02 * couple);
-  EXPECT_NEAR(cs[0].torque.x, 0.0, 0.02 * couple);
-  EXPECT_NEAR(cs[0].torque.z, 0.0, 0.02 * couple);
+  run(*e, 200);  // rolling: the couple at its limit against the spin
+  testing_support::expect_rolling_couple_against_y_spin(e->contacts(), mat.rolling_friction / 500.0);
   run(*e, 1000);
   const Grain s = state_of(*e, g);
   const double a = mat.rolling_friction * (1 / 500.0) * kG / (1.4 * r);
