@@ -222,8 +222,7 @@ class ToleranceSolver : public btSequentialImpulseConstraintSolver {
       // body0 is m_relpos1CrossNormal (setupTorsionalFrictionConstraint).
       const auto* cp =
           static_cast<const btManifoldPoint*>(m_tmpSolverContactConstraintPool[c.m_frictionIndex].m_originalContactPoint);
-      auto [it, fresh] = rolling.try_emplace(cp, 0, 0, 0);
-      it->second += c.m_relpos1CrossNormal * c.m_appliedImpulse;
+      rolling.try_emplace(cp, 0, 0, 0).first->second += c.m_relpos1CrossNormal * c.m_appliedImpulse;
     }
     return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, info);
   }
