@@ -492,41 +492,20 @@ struct BulletEngine::Impl {
     const double d = shape->equivalent_diameter();
     if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
       e->collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
-    } else if (shape->kind() == ShapeKind::Polyhedron && opt.convex_pieces) {
+    } else if (auto pieces = concave_shape_pieces(*shape, opt.concave, "bullet", &compound_failures); !pieces.empty()) {
       // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
       // concave in the engine) collides as convex pieces whose hulls cover it; a convex one
       // (within concavity_tolerance of its hull) as its hull, as below.
-      ConvexPiecesOptions po;
-      po.tolerance = opt.concavity_tolerance;
-      po.max_pieces = opt.max_convex_pieces;
-      ConvexPieces cp;
-      try {
-        // Most children are hulls already: cut only what is concave (the same test convex_pieces
-        // starts with, on the shape's cached hull).
-        if (polyhedron_mass_properties(shape->convex_hull()).volume > (1 + po.tolerance) * shape->volume())
-          cp = convex_pieces(shape->mesh(), po);
-      } catch (const std::exception& ex) {
-        // Not expected (the pieces' cuts are guarded against degenerate hulls); said once and
-        // counted rather than stopping a long run for one fragment.
-        if (compound_failures++ == 0)
-          std::cerr << "crumble: warning: bullet: a concave grain could not be cut into convex pieces ("
-                    << ex.what() << "); it collides as its convex hull (counted in summary.json: "
-                    << "engine_compound_failures)\n";
+      auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(pieces.size()));
+      btTransform identity;
+      identity.setIdentity();
+      for (const auto& piece : pieces) {
+        e->pieces.push_back(hull_shape(piece, d, *e));
+        compound->addChildShape(identity, e->pieces.back().get());
       }
-      if (cp.pieces.size() < 2) {
-        e->collision = hull_shape(shape->convex_hull(), d, *e);
-      } else {
-        auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(cp.pieces.size()));
-        btTransform identity;
-        identity.setIdentity();
-        for (const auto& piece : cp.pieces) {
-          e->pieces.push_back(hull_shape(convex_hull(piece), d, *e));
-          compound->addChildShape(identity, e->pieces.back().get());
-        }
-        e->collision = std::move(compound);
-        ++compound_shapes;
-        compound_pieces += static_cast<long>(cp.pieces.size());
-      }
+      e->collision = std::move(compound);
+      ++compound_shapes;
+      compound_pieces += static_cast<long>(pieces.size());
     } else {
       e->collision = hull_shape(shape->convex_hull(), d, *e);
     }
@@ -825,7 +804,7 @@ struct BulletEngine::Impl {
 const OptionTable& bullet_options() {
   static const OptionTable t = [] {
     const BulletEngine::Options d;
-    return OptionTable{
+    OptionTable table{
         opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
                     "spheres as their icosphere mesh (42 vertices, as Zhu & Zhao 2019) or \"sphere\" (exact btSphereShape)"),
         opt::number("length_scale", d.length_scale, 0, std::numeric_limits<double>::infinity(), "",
@@ -842,15 +821,9 @@ const OptionTable& bullet_options() {
                     "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
         opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
         opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (Zhu & Zhao 2019 §5 use 70)"),
-        opt::choice("concave_shapes", d.convex_pieces ? "convex_pieces" : "convex_hull", {"convex_pieces", "convex_hull"},
-                    "a concave polyhedral grain (a fragment kept concave, Zhu & Zhao 2019 §3.2) collides as convex pieces "
-                    "that cover it (btCompoundShape), or as its convex hull (more solid than the grain, contacts over its "
-                    "concavities)"),
-        opt::number("concavity_tolerance", d.concavity_tolerance, 0, 1, "",
-                    "convex_pieces: a polyhedron whose hull exceeds its volume by more than this fraction is cut into "
-                    "pieces until their hulls do (or max_convex_pieces)"),
-        opt::integer("max_convex_pieces", d.max_convex_pieces, 1, 64, "convex pieces of one concave grain at most"),
     };
+    for (auto& spec : concave_shape_options("btCompoundShape")) table.push_back(std::move(spec));
+    return table;
   }();
   return t;
 }
@@ -869,9 +842,7 @@ BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
   o.deep_penetration = r.number("deep_penetration");
   o.deep_erp = r.number("deep_erp");
   o.mass_scale = r.number("mass_scale");
-  o.convex_pieces = r.string("concave_shapes") == "convex_pieces";
-  o.concavity_tolerance = r.number("concavity_tolerance");
-  o.max_convex_pieces = static_cast<int>(r.integer("max_convex_pieces"));
+  o.concave = read_concave_shape_options(r);
   return o;
 }
 

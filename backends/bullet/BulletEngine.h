@@ -51,6 +51,7 @@
 #include <memory>
 
 #include "core/Config.h"
+#include "core/ConcaveShapes.h"
 #include "core/Options.h"
 #include "core/Engine.h"
 
@@ -73,9 +74,7 @@ class BulletEngine final : public Engine {
     double deep_penetration = 0;  // fraction of the first grain's d; 0 = off
     double deep_erp = 0.2;
     double mass_scale = 1;
-    bool convex_pieces = true;         // "concave_shapes": "convex_pieces" (else "convex_hull")
-    double concavity_tolerance = 0.02;  // "concavity_tolerance"
-    int max_convex_pieces = 8;         // "max_convex_pieces"
+    ConcaveShapeOptions concave;       // "concave_shapes", "concavity_tolerance", "max_convex_pieces"
   };
   static Options read_options(const Config& cfg);
 
