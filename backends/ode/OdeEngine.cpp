@@ -3,7 +3,8 @@
 // internal velocity = scale·v, force = scale·F, inertia = scale²·I; every value leaves
 // through the same factors. With the automatic scale a power of two the conversions are
 // exact. Each body's origin is its centre of mass (dBodySetMass needs it there); the geometry
-// is the shape's convex hull in that frame.
+// is the shape's convex hull in that frame, or for a concave polyhedron a few convex pieces
+// that cover it (one dConvex geom each on the body; ODE never collides geoms of one body).
 #include "backends/ode/OdeEngine.h"
 
 #include <ode/ode.h>
@@ -140,7 +141,14 @@ struct ShapeEntry {
   bool sphere = false;  // exact dSphere
   double radius = 0;    // internal, exact sphere
   double size = 0;      // equivalent diameter, internal
-  ConvexData convex;
+  ConvexData convex;    // the hull, when the shape collides as one dConvex
+  // A concave polyhedron's convex pieces (engine.concave_shapes = "convex_pieces"), one
+  // dConvex each, in its own frame: origin at the piece's centroid, which sits at
+  // piece_offsets[k] (internal) in the body frame. libccd's MPR starts from the geom's
+  // origin and needs it inside the solid; the grain's centre of mass may lie outside a piece.
+  // Empty when the hull is used. Built once: geoms point into it.
+  std::vector<ConvexData> pieces;
+  std::vector<Vec3> piece_offsets;
 };
 
 // What the near callback and the force read-out need to know about a geom.
@@ -153,10 +161,12 @@ struct GeomTag {
 };
 
 struct GrainBody {
-  GeomTag tag;
   std::shared_ptr<ShapeEntry> entry;
   dBodyID body = nullptr;
-  dGeomID geom = nullptr;
+  // One geom (the hull or the exact sphere), or one per convex piece; tags[k] is geoms[k]'s
+  // (sized before the geoms point into it).
+  std::vector<dGeomID> geoms;
+  std::vector<GeomTag> tags;
   double mass = 0;  // kg, physical
 };
 
@@ -272,6 +282,7 @@ struct OdeEngine::Impl {
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
   std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
   long concave_as_hull = 0;  // concave polyhedral shapes collided as their convex hull
+  long compound_shapes = 0, compound_pieces = 0, compound_failures = 0;  // concave shapes as convex pieces
   double total_mass = 0;  // kg, physical
   double friction_scale = 1;  // set_friction_scale: multiplies μ and the rolling coefficient
   double last_dt = 0;
@@ -295,7 +306,7 @@ struct OdeEngine::Impl {
   ~Impl() {
     dJointGroupDestroy(contact_group);
     for (auto& [id, g] : grains) {
-      dGeomDestroy(g->geom);
+      for (dGeomID geom : g->geoms) dGeomDestroy(geom);
       dBodyDestroy(g->body);
     }
     remove_container_bodies();
@@ -437,16 +448,28 @@ struct OdeEngine::Impl {
     if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
       e->sphere = true;
       e->radius = shape->parameters().at(0) * scale;
+    } else if (auto pieces = concave_shape_pieces(*shape, opt.concave, "ode", &compound_failures); !pieces.empty()) {
+      // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
+      // concave in the engine) collides as convex pieces whose hulls cover it, as in bullet;
+      // a convex one (within concavity_tolerance of its hull) as its hull, as below.
+      e->pieces.resize(pieces.size());
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        const Vec3 c = polyhedron_mass_properties(pieces[k]).centroid;
+        fill_convex(pieces[k], c, scale, e->pieces[k]);
+        e->piece_offsets.push_back((c - e->centroid) * scale);
+      }
+      ++compound_shapes;
+      compound_pieces += static_cast<long>(pieces.size());
     } else {
       fill_convex(shape->convex_hull(), e->centroid, scale, e->convex);
-      // ODE's dConvex is convex: a concave grain (a fragment Zhu & Zhao 2019 §3.2 keep concave)
-      // collides as its hull, with more solid than the grain has. Said once, and counted.
+      // engine.concave_shapes = "convex_hull" (or a shape that could not be cut): a concave
+      // grain collides as its hull, with more solid than the grain has. Said once, and counted.
       if (shape->kind() == ShapeKind::Polyhedron) {
         const double ratio = polyhedron_mass_properties(shape->convex_hull()).volume / mp.volume;
         if (ratio > 1.02 && concave_as_hull++ == 0)
           std::cerr << "crumble: note: ode collides concave grains as their convex hulls (the first: hull "
-                    << ratio << " × its volume); bullet collides them as convex pieces (engine.concave_shapes). "
-                       "Counted in summary.json: engine_concave_shapes_as_hull\n";
+                    << ratio << " × its volume; engine.concave_shapes). Counted in summary.json: "
+                       "engine_concave_shapes_as_hull\n";
       }
     }
     shape_cache[shape.get()] = e;
@@ -476,26 +499,38 @@ struct OdeEngine::Impl {
     gb->entry = shape_entry(g.shape);
     const ShapeEntry& e = *gb->entry;
     gb->mass = mat.density * g.shape->volume();
-    gb->tag.id = g.id;
-    gb->tag.material = g.material;
-    gb->tag.size = e.size;
     gb->body = dBodyCreate(world);
     dMass m;
     dMassSetZero(&m);
     const Mat3 I = e.inertia * (mat.density * opt.mass_scale * scale * scale);
     dMassSetParameters(&m, gb->mass * opt.mass_scale, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
     dBodySetMass(gb->body, &m);
+    GeomTag tag;
+    tag.id = g.id;
+    tag.material = g.material;
+    tag.size = e.size;
+    gb->tags.assign(std::max<std::size_t>(1, e.pieces.size()), tag);
+    auto add_convex = [&](const ConvexData& c) {
+      gb->tags[gb->geoms.size()].convex = &c;
+      gb->geoms.push_back(
+          dCreateConvex(space, c.planes.data(), c.plane_count, c.points.data(), c.point_count, c.polygons.data()));
+    };
     if (e.sphere) {
-      gb->geom = dCreateSphere(space, e.radius);
+      gb->geoms.push_back(dCreateSphere(space, e.radius));
+    } else if (e.pieces.empty()) {
+      add_convex(e.convex);
     } else {
-      gb->geom = dCreateConvex(space, e.convex.planes.data(), e.convex.plane_count, e.convex.points.data(),
-                               e.convex.point_count, e.convex.polygons.data());
-      gb->tag.convex = &e.convex;
+      for (const ConvexData& c : e.pieces) add_convex(c);
     }
-    dGeomSetBody(gb->geom, gb->body);
-    dGeomSetData(gb->geom, &gb->tag);
-    dGeomSetCategoryBits(gb->geom, kGrainBit);
-    dGeomSetCollideBits(gb->geom, kGrainBit | kWallBit | kPlatenBit);
+    for (std::size_t k = 0; k < gb->geoms.size(); ++k) {
+      dGeomID geom = gb->geoms[k];
+      dGeomSetBody(geom, gb->body);
+      if (!e.piece_offsets.empty())
+        dGeomSetOffsetPosition(geom, e.piece_offsets[k].x, e.piece_offsets[k].y, e.piece_offsets[k].z);
+      dGeomSetData(geom, &gb->tags[k]);
+      dGeomSetCategoryBits(geom, kGrainBit);
+      dGeomSetCollideBits(geom, kGrainBit | kWallBit | kPlatenBit);
+    }
     const Quat q = g.orientation.normalized();
     const Vec3 arm = q.rotate(e.centroid);
     const Vec3 com = (g.position + arm) * scale;
@@ -516,7 +551,7 @@ struct OdeEngine::Impl {
     // Its contact joints go to limbo with the body; their records no longer count.
     for (auto& r : recs)
       if (r.a_id == id || r.b_id == id) r.live = false;
-    dGeomDestroy(it->second->geom);
+    for (dGeomID geom : it->second->geoms) dGeomDestroy(geom);
     dBodyDestroy(it->second->body);
     total_mass -= it->second->mass;
     grains.erase(it);
@@ -645,6 +680,7 @@ struct OdeEngine::Impl {
     const auto* t2 = static_cast<const GeomTag*>(dGeomGetData(o2));
     if (!t1 || !t2) return;
     if (t1->id < 0 && t2->id < 0) return;
+    if (t1->id == t2->id) return;  // two convex pieces of one grain
     if (t1->id < 0) {  // the grain first: the normal points into it and f1 is the force on it
       std::swap(o1, o2);
       std::swap(t1, t2);
@@ -834,7 +870,7 @@ const OptionTable& ode_options() {
   static const OptionTable t = [] {
     const double inf = std::numeric_limits<double>::infinity();
     const OdeEngine::Options d;
-    return OptionTable{
+    OptionTable table{
         opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
                     "spheres as their icosphere hull (dConvex) or \"sphere\" (exact dSphere)"),
         opt::number("length_scale", d.length_scale, 0, inf, "",
@@ -853,6 +889,8 @@ const OptionTable& ode_options() {
                      "this many from the clipped touching faces (1 = libccd's point only)"),
         opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
     };
+    for (auto& spec : concave_shape_options("one dConvex geom each on the grain's body")) table.push_back(std::move(spec));
+    return table;
   }();
   return t;
 }
@@ -870,6 +908,7 @@ OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
   o.max_correcting_velocity = r.number("max_correcting_velocity");
   o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
   o.mass_scale = r.number("mass_scale");
+  o.concave = read_concave_shape_options(r);
   return o;
 }
 
@@ -886,7 +925,10 @@ bool OdeEngine::set_friction_scale(double scale) {
 void OdeEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
 std::size_t OdeEngine::grain_count() const { return impl_->grains.size(); }
 std::map<std::string, double> OdeEngine::summary_figures() const {
-  return {{"concave_shapes_as_hull", static_cast<double>(impl_->concave_as_hull)}};
+  return {{"concave_shapes_as_hull", static_cast<double>(impl_->concave_as_hull)},
+          {"compound_shapes", static_cast<double>(impl_->compound_shapes)},
+          {"compound_pieces", static_cast<double>(impl_->compound_pieces)},
+          {"compound_failures", static_cast<double>(impl_->compound_failures)}};
 }
 void OdeEngine::step(double dt) { impl_->step(dt); }
 void OdeEngine::read_state(std::span<Grain> grains) const { impl_->read_state(grains); }

@@ -25,6 +25,10 @@
 //                          many from the clipped contact faces, so stacks stand)
 //   mass_scale             > 0, default 1: grain and platen masses and inertias are
 //                          multiplied by it (Zhu & Zhao 2019 §5: 70); weights stay physical
+//   concave_shapes         "convex_pieces" | "convex_hull", default "convex_pieces": a concave
+//                          polyhedron collides as convex pieces covering it (one dConvex geom
+//                          each on its body, geometry/ConvexPieces.h, as bullet), or as its hull
+//   concavity_tolerance    [0, 1], default 0.02; max_convex_pieces 1..64, default 8: as bullet's
 //
 // Model: restitution 0; Coulomb friction μ with dContactApprox1 (the friction pyramid is
 // scaled by the normal force, so μ is a Coulomb coefficient, METHODS.md §2): the grain
@@ -46,6 +50,7 @@
 #include <memory>
 
 #include "core/Config.h"
+#include "core/ConcaveShapes.h"
 #include "core/Options.h"
 #include "core/Engine.h"
 
@@ -67,6 +72,7 @@ class OdeEngine final : public Engine {
     double max_correcting_velocity = 0;
     int contacts_per_pair = 4;
     double mass_scale = 1;
+    ConcaveShapeOptions concave;       // "concave_shapes", "concavity_tolerance", "max_convex_pieces"
   };
   static Options read_options(const Config& cfg);
 
