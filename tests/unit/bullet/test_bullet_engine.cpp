@@ -15,7 +15,7 @@
 #include "geometry/SymmetricEigen.h"
 #include "core/Config.h"
 #include "scenarios/Registry.h"
-#include "tests/support/Meshes.h"
+#include "tests/support/CupDrop.h"
 #include "tests/support/RollingCouple.h"
 
 using namespace crumble;
@@ -272,31 +272,16 @@ TEST(BulletEngine, DeepPenetrationIsPushedApartWithoutSpeed) {
 // and its contact point lies on the grain's surface. As the hull, it rests on the hull's top
 // face, 1 mm higher, over the notch: no material of the grain is there.
 TEST(BulletEngine, AConcaveGrainCollidesAsConvexPieces) {
-  const TriMesh m = testing_support::u_prism(3.0, 1e-3);
-  const auto u = Shape::polyhedron(m);  // centred: the centroid is 0.9 mm above the base
-  auto drop = [&](const char* mode, double* contact_offset) {
+  auto drop = [](const char* mode) {
     auto e = make_engine({{"concave_shapes", mode}, {"solver_iterations", 50}});
-    e->set_container({20e-3, 20e-3, 20e-3, 0});
-    const Grain cup = grain(0, u, {10e-3, 10e-3, 0.9e-3}), ball = grain(1, Shape::sphere(0.3e-3), {10e-3, 10e-3, 3e-3});
-    e->add_grain(cup);
-    e->add_grain(ball);
-    run(*e, 4000);
-    const Grain c = state_of(*e, cup), b = state_of(*e, ball);
-    *contact_offset = -1;
-    for (const auto& k : e->contacts())
-      if (k.wall < 0) {
-        const Vec3 local = c.orientation.conjugate().rotate(k.point - c.position);
-        *contact_offset = std::max(*contact_offset, std::abs(u->signed_distance(local)));
-      }
+    const auto r = testing_support::drop_ball_into_u_notch(*e, 4000, kDt);
     EXPECT_EQ(e->summary_figures().at("compound_shapes"), std::string(mode) == "convex_pieces" ? 1.0 : 0.0);
-    return b.position.z - c.position.z + 0.9e-3;  // the ball's centre above the cup's base
+    return r;
   };
-  double offset_pieces = 0, offset_hull = 0;
-  const double z_pieces = drop("convex_pieces", &offset_pieces);
-  const double z_hull = drop("convex_hull", &offset_hull);
-  EXPECT_NEAR(z_pieces, 1.3e-3, 0.05e-3);  // notch bottom (1 mm) + radius
-  EXPECT_NEAR(z_hull, 2.3e-3, 0.05e-3);    // hull top (2 mm) + radius
-  EXPECT_GE(offset_pieces, 0);
-  EXPECT_LT(offset_pieces, 0.03e-3);  // on the grain's surface, within the margins
-  EXPECT_GT(offset_hull, 0.4e-3);     // over the notch: 0.5 mm from its walls
+  const auto pieces = drop("convex_pieces"), hull = drop("convex_hull");
+  EXPECT_NEAR(pieces.ball_height, 1.3e-3, 0.05e-3);  // notch bottom (1 mm) + radius
+  EXPECT_NEAR(hull.ball_height, 2.3e-3, 0.05e-3);    // hull top (2 mm) + radius
+  EXPECT_GE(pieces.contact_offset, 0);
+  EXPECT_LT(pieces.contact_offset, 0.03e-3);  // on the grain's surface, within the margins
+  EXPECT_GT(hull.contact_offset, 0.4e-3);     // over the notch: 0.5 mm from its walls
 }

@@ -13,7 +13,7 @@
 #include "backends/ode/OdeEngine.h"
 #include "core/Config.h"
 #include "scenarios/Registry.h"
-#include "tests/support/Meshes.h"
+#include "tests/support/CupDrop.h"
 #include "tests/support/RollingCouple.h"
 
 using namespace crumble;
@@ -153,41 +153,24 @@ TEST(OdeEngine, RollingFrictionIsALeverArmInTheInternalUnit) {
 // hull it rests on the hull's top face, 1 mm higher, over the notch. The pieces of one grain
 // never collide with each other (the cup stays at rest on the floor).
 TEST(OdeEngine, AConcaveGrainCollidesAsConvexPieces) {
-  const auto u = Shape::polyhedron(testing_support::u_prism(3.0, 1e-3));  // centroid 0.9 mm above the base
-  auto drop = [&](const char* mode, double* contact_offset, double* cup_speed) {
+  auto drop = [](const char* mode) {
     auto e = make_engine({{"concave_shapes", mode}});
-    Container c;
-    c.lx = c.ly = c.height = 20e-3;
-    e->set_container(c);
-    const Grain cup = grain(0, u, {10e-3, 10e-3, 0.9e-3}), ball = grain(1, Shape::sphere(0.3e-3), {10e-3, 10e-3, 3e-3});
-    e->add_grain(cup);
-    e->add_grain(ball);
-    run(*e, 4000);
-    const Grain cs = state_of(*e, cup), b = state_of(*e, ball);
-    *cup_speed = norm(cs.velocity);
-    *contact_offset = -1;
-    for (const auto& k : e->contacts())
-      if (k.wall < 0) {
-        const Vec3 local = cs.orientation.conjugate().rotate(k.point - cs.position);
-        *contact_offset = std::max(*contact_offset, std::abs(u->signed_distance(local)));
-      }
+    const auto r = testing_support::drop_ball_into_u_notch(*e, 4000, kDt);
     const auto fig = e->summary_figures();
     const bool pieces = std::string(mode) == "convex_pieces";
     EXPECT_EQ(fig.at("compound_shapes"), pieces ? 1.0 : 0.0);
     EXPECT_EQ(fig.at("concave_shapes_as_hull"), pieces ? 0.0 : 1.0);
     EXPECT_EQ(fig.at("compound_failures"), 0.0);
     if (pieces) EXPECT_GE(fig.at("compound_pieces"), 2.0);
-    return b.position.z - cs.position.z + 0.9e-3;  // the ball's centre above the cup's base
+    return r;
   };
-  double offset_pieces = 0, offset_hull = 0, speed_pieces = 0, speed_hull = 0;
-  const double z_pieces = drop("convex_pieces", &offset_pieces, &speed_pieces);
-  const double z_hull = drop("convex_hull", &offset_hull, &speed_hull);
-  EXPECT_NEAR(z_pieces, 1.3e-3, 0.05e-3);  // notch bottom (1 mm) + radius
-  EXPECT_NEAR(z_hull, 2.3e-3, 0.05e-3);    // hull top (2 mm) + radius
-  EXPECT_GE(offset_pieces, 0);
-  EXPECT_LT(offset_pieces, 0.03e-3);  // on the grain's surface
-  EXPECT_GT(offset_hull, 0.4e-3);     // over the notch: 0.5 mm from its walls
-  EXPECT_LT(speed_pieces, 1e-3);      // no push between the grain's own pieces
+  const auto pieces = drop("convex_pieces"), hull = drop("convex_hull");
+  EXPECT_NEAR(pieces.ball_height, 1.3e-3, 0.05e-3);  // notch bottom (1 mm) + radius
+  EXPECT_NEAR(hull.ball_height, 2.3e-3, 0.05e-3);    // hull top (2 mm) + radius
+  EXPECT_GE(pieces.contact_offset, 0);
+  EXPECT_LT(pieces.contact_offset, 0.03e-3);  // on the grain's surface
+  EXPECT_GT(hull.contact_offset, 0.4e-3);     // over the notch: 0.5 mm from its walls
+  EXPECT_LT(pieces.cup_speed, 1e-3);          // no push between the grain's own pieces
 }
 
 TEST(OdeEngine, UsesDoublePrecisionOde) {
