@@ -29,7 +29,9 @@ struct Face {
 
 class Quickhull {
  public:
-  Quickhull(const std::vector<Vec3>& pts, const std::vector<int>& use) : use_(use) {
+  // `rel_tol`: a point within rel_tol × the cloud's size of a face counts as on it (besides
+  // the few ulps below).
+  Quickhull(const std::vector<Vec3>& pts, const std::vector<int>& use, double rel_tol) : use_(use) {
     // Work in coordinates centred on the bounding box: rounding of the plane tests then
     // scales with the cloud's size, not with its distance from the origin.
     Aabb box;
@@ -44,7 +46,7 @@ class Quickhull {
     size_ = norm(box.size());
     // Relative tolerance as in qhull: a few ulps of the input coordinates' magnitudes
     // (points far from the origin carry that much rounding from whoever computed them).
-    eps_ = 8 * std::numeric_limits<double>::epsilon() * (maxabs[0] + maxabs[1] + maxabs[2]);
+    eps_ = std::max(8 * std::numeric_limits<double>::epsilon() * (maxabs[0] + maxabs[1] + maxabs[2]), rel_tol * size_);
   }
 
   void run() {
@@ -324,22 +326,14 @@ std::vector<int> non_extreme_vertices(const std::vector<Vec3>& pts, const std::v
   return out;
 }
 
-}  // namespace
-
-TriMesh convex_hull(const std::vector<Vec3>& points) {
-  if (points.size() < 4)
-    throw std::invalid_argument("convex_hull: needs at least 4 points, got " + std::to_string(points.size()));
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!is_finite(points[i]))
-      throw std::invalid_argument("convex_hull: point " + std::to_string(i) + " is not finite");
-  count_built(Representation::ConvexHull);
-
+// The hull of `points` with the relative on-face tolerance `rel_tol`.
+TriMesh hull_with_tolerance(const std::vector<Vec3>& points, double rel_tol) {
   std::vector<int> use(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) use[i] = static_cast<int>(i);
   std::vector<std::array<int, 3>> tris;
   // At most a few rounds: each drops vertices that turned out not to be extreme.
   for (int round = 0; round < 8; ++round) {
-    Quickhull qh(points, use);
+    Quickhull qh(points, use, rel_tol);
     qh.run();
     tris = qh.triangles();
     const std::vector<int> drop = non_extreme_vertices(points, tris);
@@ -369,6 +363,44 @@ TriMesh convex_hull(const std::vector<Vec3>& points) {
   m.triangles.reserve(tris.size());
   for (const auto& t : tris) m.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
   return m;
+}
+
+// Whether the mesh is convex and outward: no vertex above any face's plane by more than
+// 1e-9 of its size, positive volume. Catches a hull folded over itself, where a face ended
+// up facing inwards.
+bool is_convex_outward(const TriMesh& m) {
+  const double tol = 1e-9 * norm(m.bounds().size());
+  for (const auto& t : m.triangles) {
+    const Vec3 a = m.vertices[t[0]];
+    const Vec3 c = cross(m.vertices[t[1]] - a, m.vertices[t[2]] - a);
+    const double len = norm(c);
+    if (!(len > 0)) continue;  // zero area: no plane
+    const Vec3 n = c / len;
+    for (const auto& v : m.vertices)
+      if (dot(n, v - a) > tol) return false;
+  }
+  return polyhedron_mass_properties(m).volume > 0;
+}
+
+}  // namespace
+
+TriMesh convex_hull(const std::vector<Vec3>& points) {
+  if (points.size() < 4)
+    throw std::invalid_argument("convex_hull: needs at least 4 points, got " + std::to_string(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!is_finite(points[i]))
+      throw std::invalid_argument("convex_hull: point " + std::to_string(i) + " is not finite");
+  count_built(Representation::ConvexHull);
+  // A few ulps decide what is on a face. Nearly coplanar points (the cuts of
+  // geometry/ConvexPieces put many points on one plane) can then fold the hull over itself
+  // (two faces of a 72-point piece facing inwards, 0.1 of its size off); a tolerance of
+  // 1e-12 or 1e-10 of the cloud's size, which drops points that close to the hull, does not.
+  for (const double rel_tol : {0.0, 1e-12, 1e-10}) {
+    TriMesh m = hull_with_tolerance(points, rel_tol);
+    if (is_convex_outward(m)) return m;
+  }
+  throw std::runtime_error("convex_hull: internal error: the hull of " + std::to_string(points.size()) +
+                           " points is not convex at any tolerance");
 }
 
 }  // namespace crumble
