@@ -167,8 +167,35 @@ namespace {
 struct StageRow {
   double from = 0, to = 0, wall = 0, wall_total = 0, engine_ms = NAN, mean_ms = NAN, share = NAN;
   bool complete = false, resumed = false;
-  long grains_start = 0, grains = 0, analyses = 0, breaking = 0;
+  long grains_start = 0, grains = 0, analyses = 0, breaking = 0, steps = 0;
 };
+
+// Weighted mean of two values that may be missing (NaN: nothing to average).
+double weighted(double a, double wa, double b, double wb) {
+  if (!std::isfinite(a) || !(wa > 0)) return std::isfinite(b) && wb > 0 ? b : a;
+  if (!std::isfinite(b) || !(wb > 0)) return a;
+  return (a * wa + b * wb) / (wa + wb);
+}
+
+// A run stopped cleanly (SIGTERM, or a time budget) inside a stage writes it as a partial row;
+// resumed, it writes the rest of that stage from where the partial row ended. Joined, the two
+// are the row an uninterrupted run writes (counts and times summed, means weighted).
+void join_into(StageRow& a, const StageRow& b) {
+  const double ta = std::isfinite(a.mean_ms) ? a.mean_ms * static_cast<double>(a.analyses) : 0;
+  const double tb = std::isfinite(b.mean_ms) ? b.mean_ms * static_cast<double>(b.analyses) : 0;
+  a.share = weighted(a.share, ta, b.share, tb);
+  a.mean_ms = weighted(a.mean_ms, static_cast<double>(a.analyses), b.mean_ms, static_cast<double>(b.analyses));
+  a.engine_ms = weighted(a.engine_ms, static_cast<double>(a.steps), b.engine_ms, static_cast<double>(b.steps));
+  a.to = b.to;
+  a.complete = b.complete;
+  a.resumed = a.resumed || b.resumed;
+  a.grains = b.grains;
+  a.wall += b.wall;
+  a.wall_total = b.wall_total;
+  a.analyses += b.analyses;
+  a.breaking += b.breaking;
+  a.steps += b.steps;
+}
 
 std::string fmt(double v, int prec = 3) {
   if (!std::isfinite(v)) return "—";
@@ -202,7 +229,7 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
   const std::size_t c_from = col(ax.from), c_to = col(ax.to), c_complete = col("complete"),
                     c_resumed = col("resumed"), c_g0 = col("grains_start"), c_g = col("grains"), c_wall = col("wall_s"),
                     c_total = col("wall_total_s"), c_eng = col("engine_ms_per_step"), c_an = col("analyses"),
-                    c_br = col("breaking_analyses"), c_mean = col("mean_analysis_ms"),
+                    c_br = col("breaking_analyses"), c_mean = col("mean_analysis_ms"), c_steps = col("steps"),
                     c_share = col("breaking_share_of_analysis_time");
   std::vector<StageRow> st;
   for (std::size_t i = 1; i < rows.size(); ++i) {
@@ -225,6 +252,12 @@ nlohmann::json stage_report(const std::string& dir, double target, std::string* 
     s.wall = num(c_wall), s.wall_total = num(c_total), s.engine_ms = num(c_eng, true);
     s.analyses = static_cast<long>(num(c_an)), s.breaking = static_cast<long>(num(c_br));
     s.mean_ms = num(c_mean, true), s.share = num(c_share, true);
+    s.steps = static_cast<long>(num(c_steps));
+    if (!st.empty() && !st.back().complete && std::abs(s.from - st.back().to) < 1e-9 &&
+        std::floor(s.from + 1e-9) == std::floor(st.back().from + 1e-9)) {
+      join_into(st.back(), s);  // the rest of a stage interrupted and resumed
+      continue;
+    }
     st.push_back(s);
   }
   if (st.empty()) throw InputError(path + ": no stage yet");

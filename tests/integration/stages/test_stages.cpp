@@ -87,6 +87,50 @@ TEST(Stages, TooFewStagesSayToRunFurther) {
   EXPECT_NE(j["note"].get<std::string>().find("run further"), std::string::npos);
 }
 
+// A run stopped cleanly inside a stage (SIGTERM, a time budget) writes it as a partial row and,
+// resumed, the rest of it from there: the report joins the two into the row an uninterrupted
+// run writes (wall, analyses and steps summed; mean analysis time, breaking share and engine
+// time per step weighted), so the table, the fits and the extrapolation do not change.
+TEST(Stages, AStageInterruptedAndResumedIsOneRow) {
+  const fs::path whole = write_table("crumble_stages_whole", 12, false);
+  const fs::path split = write_table("crumble_stages_split", 12, false);
+  {
+    std::ifstream in(split / "stages.csv");
+    std::vector<std::string> lines;
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+    // Stage 5–6 (line 7): wall w, 50 analyses, 20 breaking, 100 steps, 30 ms mean, share 0.7,
+    // 10 ms/step. Interrupted at 5.4 MPa after 0.4 w, 20 analyses (8 breaking, 40 ms mean,
+    // share 0.5), 40 steps at 12 ms; resumed for the rest: 30 analyses (12 breaking, 70/3 ms
+    // mean, share 0.7·(50·30) − 0.5·(20·40) over 30·70/3), 60 steps at 26/3 ms.
+    std::vector<std::string> c;
+    std::stringstream ss(lines[6]);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    const double w = std::stod(c[8]), total = std::stod(c[9]);
+    auto row = [&](const std::string& from, const std::string& to, int complete, double wall, double wall_total,
+                   int steps, double eng, int an, int br, double mean, double share) {
+      std::ostringstream o;
+      o << std::setprecision(17) << from << ',' << to << ',' << complete << ",0," << c[4] << ',' << c[5] << ','
+        << c[6] << ',' << c[7] << ',' << wall << ',' << wall_total << ',' << steps << ",1," << eng << ',' << an << ','
+        << br << ",1," << mean << ',' << share << ",0.1,0,0";
+      return o.str();
+    };
+    const double share2 = (0.7 * 50 * 30 - 0.5 * 20 * 40) / (30 * 70.0 / 3);
+    lines[6] = row("5", "5.4", 0, 0.4 * w, total - 0.6 * w, 40, 12, 20, 8, 40, 0.5) + "\n" +
+               row("5.4", "6", 1, 0.6 * w, total, 60, 26.0 / 3, 30, 12, 70.0 / 3, share2);
+    std::ofstream out(split / "stages.csv");
+    for (const auto& l : lines) out << l << '\n';
+  }
+  std::string md_whole, md_split;
+  const auto a = crumble::stage_report(whole.string(), 30, &md_whole);
+  const auto b = crumble::stage_report(split.string(), 30, &md_split);
+  ASSERT_EQ(a["stages"].size(), b["stages"].size()) << md_split;
+  EXPECT_EQ(a["stages"][5], b["stages"][5]);
+  EXPECT_EQ(a["cost_fit"]["stages"], b["cost_fit"]["stages"]);
+  EXPECT_NEAR(b["predicted_wall_s"].get<double>(), a["predicted_wall_s"].get<double>(),
+              1e-9 * a["predicted_wall_s"].get<double>());
+  EXPECT_EQ(md_whole, md_split);
+}
+
 TEST(Stages, CliNamesAMissingOrBrokenFile) {
   const fs::path dir = fs::temp_directory_path() / "crumble_stages_missing";
   fs::remove_all(dir);
