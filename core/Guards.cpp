@@ -39,6 +39,15 @@ std::string advice(const GuardContext& at) {
 
 }  // namespace
 
+void check_stress_carried(const GuardSettings& s, const GuardContext& at, double commanded_stress) {
+  if (!s.enabled || !(commanded_stress > 0) || at.platen_stress >= 0.5 * commanded_stress) return;
+  std::ostringstream os;
+  os << "at the end of the stress ramp the packing carries " << at.platen_stress << " Pa of the " << commanded_stress
+     << " Pa the platen is driven with: the platen met (almost) no resistance and is falling through the packing. "
+        "Lengthen loading.ramp_time (or add loading.hold_time)";
+  fail(at, os.str());
+}
+
 void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, double platen_height, double void_ratio,
                              double platen_force) {
   if (!std::isfinite(platen_height) || !std::isfinite(platen_force) || !std::isfinite(void_ratio))

@@ -61,6 +61,12 @@ struct GuardContext {
 
 // O(1) checks on the state the loop already has: finite values, platen above the floor,
 // void ratio > 0. Throws PhysicsGuardError.
+// At the end of a stress ramp that ran its course: the packing must carry at least half the
+// stress the platen is driven with. Less means the platen is falling through a packing that
+// gave way (ode, 1000 MPa on 8 crushable grains in 4 steps: 0 Pa measured at the end against
+// 1000 MPa commanded, and exit 0 before this check).
+void check_stress_carried(const GuardSettings& s, const GuardContext& at, double commanded_stress);
+
 void check_scalar_invariants(const GuardSettings& s, const GuardContext& at, double platen_height,
                              double void_ratio, double platen_force);
 

@@ -349,6 +349,11 @@ RunSummary Simulation::run(const Progress& progress) {
       progress(st, loading_.progress(time_, st.platen_stress, st.axial_strain));
     }
   }
+  if (!sum.interrupted && !container_.open && loading_.settings().mode == "stress_ramp" &&
+      loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
+    GuardContext at{"loading", step_, time_, st.platen_stress, dt_, engine_->name(), 0};
+    check_stress_carried(settings_.guards, at, loading_.target_stress(time_));
+  }
   {
     // Everything in the loop that no part above timed (Observer.h, Timings::loop).
     const Timings& a = before_loop;

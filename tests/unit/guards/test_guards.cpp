@@ -152,3 +152,21 @@ TEST(Guards, TinyGrainOutsideTheContainerIsListedForRemovalNotFatal) {
   gs[1].position.z = 0.002;
   EXPECT_NE(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.008, gs, kMat, {}); }), "");
 }
+
+// The end of a stress ramp: the packing must carry at least half the commanded stress.
+TEST(Guards, AStressRampEndsWithItsStressCarried) {
+  const GuardSettings s;
+  GuardContext at = ctx();
+  at.platen_stress = 0.6e9;
+  EXPECT_EQ(failure_of([&] { check_stress_carried(s, at, 1e9); }), "");
+  at.platen_stress = 0;  // the platen touches nothing
+  const std::string why = failure_of([&] { check_stress_carried(s, at, 1e9); });
+  EXPECT_NE(why.find("carries 0 Pa of the 1e+09 Pa"), std::string::npos) << why;
+  EXPECT_NE(why.find("loading.ramp_time"), std::string::npos) << why;
+  at.platen_stress = 0.49e9;
+  EXPECT_NE(failure_of([&] { check_stress_carried(s, at, 1e9); }), "");
+  EXPECT_EQ(failure_of([&] { check_stress_carried(s, at, 0); }), "");  // nothing commanded
+  GuardSettings off;
+  off.enabled = false;
+  EXPECT_EQ(failure_of([&] { check_stress_carried(off, at, 1e9); }), "");
+}
