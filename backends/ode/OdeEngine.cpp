@@ -294,7 +294,11 @@ struct OdeEngine::Impl {
     std::string why;
     if (!ode_double_precision_ok(&why)) throw std::runtime_error("ode: " + why);
     world = dWorldCreate();
-    space = dHashSpaceCreate(nullptr);
+    // Sweep and prune, not ODE's hash space: on a settled packing the hash space left 2 of
+    // about 300 pairs with overlapping bounding boxes untested at every step (grains in a
+    // corner of the box sank 0.75 mm into each other with no contact; test
+    // OdeEngine.EveryOverlappingPairOfASettledPackingIsInContact). Same cost per step.
+    space = dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ);
     contact_group = dJointGroupCreate(0);
     dWorldSetQuickStepNumIterations(world, opt.solver_iterations);
     dWorldSetQuickStepW(world, opt.sor_w);
