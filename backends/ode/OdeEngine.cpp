@@ -4,7 +4,8 @@
 // through the same factors. With the automatic scale a power of two the conversions are
 // exact. Each body's origin is its centre of mass (dBodySetMass needs it there); the geometry
 // is the shape's convex hull in that frame, or for a concave polyhedron a few convex pieces
-// that cover it (one dConvex geom each on the body; ODE never collides geoms of one body).
+// that cover it (one dConvex geom each on the body; the near callback skips two pieces of one
+// grain).
 #include "backends/ode/OdeEngine.h"
 
 #include <ode/ode.h>
