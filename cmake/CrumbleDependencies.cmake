@@ -27,7 +27,7 @@ if(CRUMBLE_WITH_BULLET)
     message(FATAL_ERROR "crumble: pkg-config is needed to find Bullet: apt-get install pkg-config")
   endif()
   # Debian ships Bullet twice; only the float64 build may be linked, always together with
-  # BT_USE_DOUBLE_PRECISION (mixing them corrupts memory silently: METHODS.md §2).
+  # BT_USE_DOUBLE_PRECISION (mixing them corrupts memory silently).
   pkg_check_modules(BULLET64 QUIET IMPORTED_TARGET bullet-float64)
   crumble_require(BULLET64_FOUND libbullet-dev "Bullet (double precision, pkg-config bullet-float64)")
   get_target_property(_bt_defs PkgConfig::BULLET64 INTERFACE_COMPILE_OPTIONS)

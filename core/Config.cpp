@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 namespace crumble {
 

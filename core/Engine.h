@@ -111,7 +111,13 @@ class Engine {
   // many concave grain shapes it collides as convex pieces).
   virtual std::map<std::string, double> summary_figures() const { return {}; }
 
-  // Checkpoints (scenarios/Checkpoint.h): the engine's own state beyond what the grain
+  // What a user can change when a physical guard stops a run on this engine (core/Guards.h):
+  // a sentence or two naming the settings that keep its grains apart at the stress reached.
+  virtual std::string guard_advice() const {
+    return "Reduce the time step (time_step), stiffen the contacts, or lower loading.max_stress.";
+  }
+
+  // Checkpoints (output/Checkpoint.h): the engine's own state beyond what the grain
   // records carry (contact history, velocities at half steps, exact orientations, the
   // platen's motion and the forces last measured), so that a resumed run continues the
   // uninterrupted one bit for bit. save_state() fills `out` with a JSON object whose

@@ -16,24 +16,8 @@ std::string where(const GuardContext& at) {
   return os.str();
 }
 
-// What a user can change, per engine: the engines keep grains apart by different means.
-std::string advice(const GuardContext& at) {
-  // Bullet: measured on the Zhu & Zhao oedometer (docs/validation.md), a smaller step or more
-  // iterations did not stop a fragment creeping into a neighbour; the deep correction did.
-  if (at.engine == "bullet")
-    return "Push deep overlaps apart (engine.deep_penetration, e.g. 0.1), converge the contact forces "
-           "(engine.solver_iterations, engine.solver_tolerance 0), reduce the time step (time_step), or lower "
-           "loading.max_stress; a run stopped here resumes with any of these from its last checkpoint.";
-  if (at.engine == "ode")
-    return "Reduce the time step (time_step), raise engine.solver_iterations, or lower loading.max_stress.";
-  if (at.engine == "lsdem")
-    return "Raise the contact stiffness (engine.kn) so overlaps stay small at this stress, reduce the time step "
-           "(time_step), or lower loading.max_stress.";
-  return "Reduce the time step (time_step), stiffen the contacts, or lower loading.max_stress.";
-}
-
 [[noreturn]] void fail(const GuardContext& at, const std::string& what) {
-  throw PhysicsGuardError("physical guard failed " + where(at) + ": " + what + ". " + advice(at) +
+  throw PhysicsGuardError("physical guard failed " + where(at) + ": " + what + ". " + at.advice +
                           " (Guards: simulation.guards; see docs/scenarios.md.)");
 }
 

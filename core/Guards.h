@@ -53,7 +53,7 @@ struct GuardContext {
   double time = 0;
   double platen_stress = 0;
   double dt = 0;
-  std::string engine;         // name, for the advice
+  std::string advice;         // what to change, from the engine (Engine::guard_advice)
   double energy_budget = 0;   // J (2D: J/m): energy that can have entered the system
   double reference_diameter = 0;  // m: mean equivalent diameter of the initial grains
   bool open = false;          // an open scene: no platen or void ratio; containment in the domain

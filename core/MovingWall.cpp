@@ -3,7 +3,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/Engine.h"
 
 namespace crumble {
 
@@ -73,15 +72,5 @@ double wall_max_speed(const MovingWall& w, double radius) {
   }
   return 0;
 }
-
-// Engines without moving walls refuse them by name (never a silent fallback).
-int Engine::add_moving_wall(const MovingWall& w) {
-  throw std::invalid_argument("engine '" + name() + "' does not support moving walls (wall '" + w.name +
-                              "'); use an engine that does, e.g. \"lsdem\"");
-}
-void Engine::set_moving_wall(int, const WallKinematics&) {
-  throw std::logic_error("engine '" + name() + "' has no moving walls");
-}
-Vec3 Engine::moving_wall_force(int) const { throw std::logic_error("engine '" + name() + "' has no moving walls"); }
 
 }  // namespace crumble

@@ -29,7 +29,7 @@ struct ProductGrain {
   double volume = 0;     // m³ (2D: m²)
   double mass = 0;       // kg (2D: kg/m)
   double diameter = 0;   // equivalent diameter (m)
-  double sieve = 0;      // sieve size (m): Harmon et al. 2020 §4.2 (core/Analysis.h sieve_size)
+  double sieve = 0;      // sieve size (m): Harmon et al. 2020 §4.2 (core/Measures.h sieve_size)
 };
 
 }  // namespace crumble

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 namespace crumble {
 

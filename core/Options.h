@@ -1,4 +1,4 @@
-// The options of a registered implementation, declared once (DESIGN.md "Options"): key,
+// The options of a registered implementation, declared once: key,
 // type, default, range and one line of documentation per option. Everything that needs to
 // know an implementation's options reads its table: the implementation itself (through
 // `Options`, which takes defaults and ranges from the table), the scenario factory (which

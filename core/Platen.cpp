@@ -6,15 +6,6 @@
 
 namespace crumble {
 
-double Engine::wall_force(int wall) const {
-  // The contact normal points from the wall into the grain and the force is the one on the
-  // grain, so the push on the wall along its outward normal is dot(force, normal).
-  double f = 0;
-  for (const auto& c : contacts())
-    if (c.wall == wall) f += dot(c.force, c.normal);
-  return f;
-}
-
 Vec3 wall_inward_normal(int wall, int dimension) {
   Vec3 n;
   const int up = dimension == 3 ? 2 : 1;

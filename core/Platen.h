@@ -1,5 +1,4 @@
-// The container and its platen: one piece of physics below the engines (DESIGN.md,
-// "Engine seam"). Every engine builds the same box from container_planes() and moves the
+// The container and its platen: one piece of physics below the engines. Every engine builds the same box from container_planes() and moves the
 // platen by the same rules through a PlatenDriver; an engine only adapts them to its own
 // bodies and units.
 #pragma once

@@ -13,8 +13,6 @@
 
 namespace crumble {
 
-double Engine::max_stable_dt() const { return std::numeric_limits<double>::infinity(); }
-
 namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
@@ -172,7 +170,7 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   at.step = step_;
   at.time = time_;
   at.dt = dt;
-  at.engine = engine_->name();
+  at.advice = engine_->guard_advice();
   at.open = container_.open;
   const RunState st = state();
   at.platen_stress = st.platen_stress;
@@ -325,15 +323,15 @@ RunSummary Simulation::run(const Progress& progress) {
       check_guards("loading", dt, true);
       timings_.guards += seconds_since(t0);
     } else {
-      GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->name(), 0};
+      GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->guard_advice(), 0};
       at.open = container_.open;
       check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
     }
     sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
     // A stress ramp schedules by the stress it commands (Zhu & Zhao 2019 §5: a check every
-    // 0.08 MPa of loading). The measured stress of an explicit engine rings, and one
-    // transient peak used to postpone every later check until the stress came back to it
-    // (lsdem on the Zhu & Zhao packing: no check from a 37 MPa start-up peak on).
+    // 0.08 MPa of loading). The measured stress of an explicit engine rings: scheduled
+    // by it, one transient peak would postpone every later check until the stress came back
+    // to it (lsdem on the Zhu & Zhao packing: no check from a 37 MPa start-up peak on).
     const double schedule_stress = loading_.settings().mode == "stress_ramp" ? st.target_stress : st.platen_stress;
     if (model_->active() && schedule_.due(step_, schedule_stress)) {
       check_breakage(st);
@@ -351,7 +349,7 @@ RunSummary Simulation::run(const Progress& progress) {
   }
   if (!sum.interrupted && !container_.open && loading_.settings().mode == "stress_ramp" &&
       loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
-    GuardContext at{"loading", step_, time_, st.platen_stress, dt_, engine_->name(), 0};
+    GuardContext at{"loading", step_, time_, st.platen_stress, dt_, engine_->guard_advice(), 0};
     check_stress_carried(settings_.guards, at, loading_.target_stress(time_));
   }
   {

@@ -1,4 +1,4 @@
-// The one loop of DESIGN.md: load, step, check breakage on schedule, replace broken
+// The one loop: load, step, check breakage on schedule, replace broken
 // grains by their fragments, notify observers.
 #pragma once
 #include <atomic>

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/Analysis.h"
+#include "core/Measures.h"
 #include "core/Simulation.h"
 
 namespace crumble {

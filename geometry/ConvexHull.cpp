@@ -4,8 +4,8 @@
 // hull vertices that are not extreme (a point in the middle of a face or an edge that was
 // picked before the corners around it) and rebuilds from the extreme points only.
 #include "geometry/ConvexHull.h"
-#include "geometry/BuildCounters.h"
-#include "geometry/Format.h"
+#include "base/BuildCounters.h"
+#include "base/Format.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Discrete level sets (Harmon et al. 2020 §2, Appendix; Kawamoto et al. 2016).
 //
-// Decisions (METHODS.md §4 leaves them open):
+// Decisions of ours (Harmon et al. 2020 leave them open):
 // - Interpolation: trilinear (2D bilinear) of the node values; outside the grid the value
 //   at the nearest grid point plus the distance to it (an upper bound of the distance, so
 //   a point outside the grid never reads as penetrating).

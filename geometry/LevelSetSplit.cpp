@@ -1,6 +1,6 @@
 #include "geometry/LevelSetSplit.h"
 
-#include "geometry/BuildCounters.h"
+#include "base/BuildCounters.h"
 
 #include <algorithm>
 #include <cmath>

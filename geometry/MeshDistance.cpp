@@ -11,7 +11,7 @@
 // Everything is built in the constructor; queries only read, so concurrent const calls
 // are safe.
 #include "geometry/MeshDistance.h"
-#include "geometry/BuildCounters.h"
+#include "base/BuildCounters.h"
 
 #include <algorithm>
 #include <array>

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "geometry/BuildCounters.h"
+#include "base/BuildCounters.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/MeshDistance.h"

@@ -16,7 +16,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "scenarios/Checkpoint.h"
+#include "output/Checkpoint.h"
 #include "scenarios/Plugins.h"
 
 namespace crumble::mpi {

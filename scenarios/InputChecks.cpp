@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 namespace crumble {
 

@@ -1,5 +1,4 @@
 #include "scenarios/Packing.h"
-#include "scenarios/Walls.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,9 +8,9 @@
 #include <map>
 #include <unordered_map>
 
-#include "geometry/Format.h"
-#include "scenarios/Checkpoint.h"
-#include "scenarios/ShapeSpec.h"
+#include "base/Format.h"
+#include "output/Checkpoint.h"
+#include "core/ShapeSpec.h"
 
 namespace crumble {
 
@@ -49,13 +48,13 @@ Quat random_orientation(Rng& rng, int dim) {
       .normalized();
 }
 
+}  // namespace
+
 Json scaled_spec(const Json& tmpl, double factor) {
   Json j = tmpl;
   j["scale"] = j.value("scale", 1.0) * factor;
   return j;
 }
-
-}  // namespace
 
 PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng& rng) {
   PackingSpec spec;
@@ -68,7 +67,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
 
   if (spec.type == "cloud") {
     // At most 1e6 grains: far beyond what one machine runs (the full Zhu & Zhao 2019 run ends near
-    // 27 400), and 8e6 grains took minutes only to build their shapes (found by the fuzz loop).
+    // 27 400), and 8e6 grains take minutes only to build their shapes.
     const long count = pc.integer("count", 100, 1, 1000000);
     // Sizes: a PSD by mass, or one "diameter" for all grains.
     std::vector<PsdPoint> psd;
@@ -177,8 +176,7 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     auto cell_of = [&](double x) { return static_cast<long>(std::clamp(std::floor(x / cell), -4e18, 4e18)); };
     std::unordered_map<unsigned long long, std::vector<std::size_t>> bins;
     // 2^21 cells per axis, wrapping modulo 2^64 (unsigned: defined) for containers with more
-    // cells than that (a 1e9 m box of mm grains, found by the fuzz loop under UBSan as a signed
-    // overflow): two cells sharing a key only add distance checks, never change a decision.
+    // cells than that (a 1e9 m box of mm grains would overflow a signed key): two cells sharing a key only add distance checks, never change a decision.
     auto key = [](long i, long j, long k) {
       using U = unsigned long long;
       return (static_cast<U>(i) * 2097152ULL + static_cast<U>(j)) * 2097152ULL + static_cast<U>(k);
@@ -288,31 +286,6 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
     if (spec.type == "file" && file_cfg) file_cfg->check_unknown();
     return spec;
   }
-  return spec;
-}
-
-PackingSpec scene_from_config(const Config& sc, int dim, Rng& rng) {
-  PackingSpec spec;
-  spec.type = sc.choice("type", "single_grain", {"single_grain", "jaw_crusher"});
-  if (spec.type == "jaw_crusher") return jaw_crusher_scene(sc, dim, rng);
-  const double d = sc.positive("diameter", 2e-3);
-  Config shc = sc.child("shape");
-  const Shape::Ptr tmpl = shape_from_config(shc, dim, /*unit_size=*/true);
-  PlacedGrain g;
-  g.shape = tmpl->scaled(d / tmpl->equivalent_diameter());
-  g.shape_spec = scaled_spec(shc.doc(), d / tmpl->equivalent_diameter());
-  g.material = static_cast<int>(sc.integer("material", 0, 0));
-  g.source = sc.path();
-  const Aabb b = g.shape->bounds();
-  const double half_height = dim == 3 ? -b.lo.z : -b.lo.y;
-  const double height = dim == 3 ? b.hi.z - b.lo.z : b.hi.y - b.lo.y;
-  spec.container.lx = 3 * d;
-  spec.container.ly = dim == 3 ? 3 * d : 0;
-  spec.container.height = height;
-  spec.container.platen_mass = sc.number("platen_mass", 0.0, 0.0);
-  g.position = dim == 3 ? Vec3{1.5 * d, 1.5 * d, half_height} : Vec3{1.5 * d, half_height, 0};
-  spec.grains.push_back(std::move(g));
-  spec.settle = false;
   return spec;
 }
 

@@ -60,12 +60,8 @@ struct PackingSpec {
 // Reads the "packing" and "container" objects; for "cloud" draws the grains now.
 PackingSpec packing_from_config(const Config& packing, const Config& container, int dimension, Rng& rng);
 
-// Scene builders: a whole set-up from a few numbers.
-//   {"type": "single_grain", "diameter": d, "shape": SHAPE (template, default sphere)}:
-//   one grain resting on the floor of a 3d × 3d box, the platen touching its top
-//   (Zhu & Zhao 2019 §4.2: a grain crushed between two plates).
-//   {"type": "jaw_crusher", ...}: the 2D jaw crusher of Harmon et al. 2020 §4 (scenarios/Walls.h).
-PackingSpec scene_from_config(const Config& scene, int dimension, Rng& rng);
+// The shape spec of a template (JSON) scaled by `factor`.
+nlohmann::json scaled_spec(const nlohmann::json& tmpl, double factor);
 
 struct SettleResult {
   long steps = 0;

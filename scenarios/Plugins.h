@@ -1,4 +1,4 @@
-// Out-of-tree plugins (DESIGN.md "Registry and plugins", STYLE.md §4): a shared library
+// Out-of-tree plugins (docs/architecture.md): a shared library
 // exporting two C entry points,
 //
 //   extern "C" int crumble_plugin_abi();   // must return crumble::kPluginAbi

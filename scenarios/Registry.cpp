@@ -18,7 +18,7 @@
 #include "breakage/peridynamics/Peridynamics.h"
 #include "breakage/stress/StressModel.h"
 #include "geometry/level_set/LevelSetBuilder.h"
-#include "scenarios/VtkWriter.h"
+#include "output/VtkWriter.h"
 
 namespace crumble {
 
@@ -144,11 +144,20 @@ std::vector<NamedOptions> find_options(const std::string& name, const std::strin
   throw ConfigError(where, "unknown implementation '" + name + "'; known: " + known);
 }
 
+std::vector<NotCompiled> not_compiled() {
+  std::vector<NotCompiled> out;
+  if (!CRUMBLE_WITH_BULLET) out.push_back({"engine", "bullet", "built with CRUMBLE_WITH_BULLET=OFF"});
+  if (!CRUMBLE_WITH_ODE) out.push_back({"engine", "ode", "built with CRUMBLE_WITH_ODE=OFF"});
+  if (!CRUMBLE_WITH_CGAL) {
+    out.push_back({"breakage model", "block_beam", "built with CRUMBLE_WITH_CGAL=OFF"});
+    out.push_back({"fragment builder", "alpha_shape", "built with CRUMBLE_WITH_CGAL=OFF"});
+  }
+  return out;
+}
+
 std::string not_compiled_reason(const std::string& seam, const std::string& name) {
-  if (seam == "engine" && name == "bullet" && !CRUMBLE_WITH_BULLET) return "built with CRUMBLE_WITH_BULLET=OFF";
-  if (seam == "engine" && name == "ode" && !CRUMBLE_WITH_ODE) return "built with CRUMBLE_WITH_ODE=OFF";
-  if (seam == "fragment builder" && name == "alpha_shape" && !CRUMBLE_WITH_CGAL)
-    return "built with CRUMBLE_WITH_CGAL=OFF";
+  for (const auto& n : not_compiled())
+    if (n.seam == seam && n.name == name) return n.reason;
   return "";
 }
 

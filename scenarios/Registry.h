@@ -1,4 +1,4 @@
-// The three registration tables (DESIGN.md "Registry and plugins"): the name in the
+// The three registration tables (docs/architecture.md): the name in the
 // scenario JSON is the name in the table. Built-in entries are listed explicitly in
 // Registry.cpp; plugins add theirs at run time through `add`.
 #pragma once
@@ -64,8 +64,14 @@ std::vector<NamedOptions> registered_options();
 // Throws ConfigError at `where` listing every registered name when `name` is unknown.
 std::vector<NamedOptions> find_options(const std::string& name, const std::string& where);
 
-// Names known to the design but not compiled into this binary, with the reason
-// (e.g. "bullet: built with CRUMBLE_WITH_BULLET=OFF"), so the error can say so.
+// Implementations known to the design but not compiled into this binary, with the reason
+// (e.g. engine bullet: "built with CRUMBLE_WITH_BULLET=OFF"), so errors and `crumble list`
+// can say so.
+struct NotCompiled {
+  std::string seam, name, reason;
+};
+std::vector<NotCompiled> not_compiled();
+// The reason `name` of `seam` is not in this build; "" when it is (or is unknown).
 std::string not_compiled_reason(const std::string& seam, const std::string& name);
 
 }  // namespace crumble

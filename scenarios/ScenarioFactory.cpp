@@ -7,11 +7,11 @@
 #include <set>
 #include <sstream>
 
-#include "geometry/Format.h"
+#include "base/Format.h"
 #include "scenarios/Fidelity.h"
 #include "scenarios/InputChecks.h"
 #include "scenarios/Registry.h"
-#include "scenarios/VtkWriter.h"
+#include "output/VtkWriter.h"
 #include "scenarios/Walls.h"
 
 namespace crumble {

@@ -25,7 +25,7 @@ struct OutputSettings {
   bool vtk_contacts = false;             // contact-force lines in each VTK snapshot
   bool vtk_analyses = false;             // per-point data of breakage analyses (vtk/analysis_*.vtp)
   long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
-  bool plots = true;                     // PNG figures at the end of `crumble run` (scenarios/Plots.h)
+  bool plots = true;                     // PNG figures at the end of `crumble run` (output/Plots.h)
   double checkpoint_every_s = 0;         // wall-time seconds between checkpoint.json writes (0 = none)
   long psd_layers = 0;                   // psd_layers.csv: sieve curves per layer of the initial packing (0 = none)
 };

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "geometry/Format.h"
-#include "scenarios/ShapeSpec.h"
+#include "base/Format.h"
+#include "core/ShapeSpec.h"
 
 namespace crumble {
 
@@ -196,6 +196,31 @@ PackingSpec jaw_crusher_scene(const Config& sc, int dim, Rng& rng) {
   spec.scene_figures = {{"jaw_plate_length_m", L},  {"jaw_plate_height_m", H},   {"jaw_css_m", css},
                         {"jaw_oss_m", css + thr},    {"jaw_feed_opening_m", Tx}, {"jaw_cycles", cycles},
                         {"jaw_swing_amplitude_deg", swing.motion.amplitude() / kDeg}};
+  return spec;
+}
+
+PackingSpec scene_from_config(const Config& sc, int dim, Rng& rng) {
+  PackingSpec spec;
+  spec.type = sc.choice("type", "single_grain", {"single_grain", "jaw_crusher"});
+  if (spec.type == "jaw_crusher") return jaw_crusher_scene(sc, dim, rng);
+  const double d = sc.positive("diameter", 2e-3);
+  Config shc = sc.child("shape");
+  const Shape::Ptr tmpl = shape_from_config(shc, dim, /*unit_size=*/true);
+  PlacedGrain g;
+  g.shape = tmpl->scaled(d / tmpl->equivalent_diameter());
+  g.shape_spec = scaled_spec(shc.doc(), d / tmpl->equivalent_diameter());
+  g.material = static_cast<int>(sc.integer("material", 0, 0));
+  g.source = sc.path();
+  const Aabb b = g.shape->bounds();
+  const double half_height = dim == 3 ? -b.lo.z : -b.lo.y;
+  const double height = dim == 3 ? b.hi.z - b.lo.z : b.hi.y - b.lo.y;
+  spec.container.lx = 3 * d;
+  spec.container.ly = dim == 3 ? 3 * d : 0;
+  spec.container.height = height;
+  spec.container.platen_mass = sc.number("platen_mass", 0.0, 0.0);
+  g.position = dim == 3 ? Vec3{1.5 * d, 1.5 * d, half_height} : Vec3{1.5 * d, half_height, 0};
+  spec.grains.push_back(std::move(g));
+  spec.settle = false;
   return spec;
 }
 

@@ -18,4 +18,11 @@ MovingWall wall_from_config(const Config& c, int dimension, const std::string& d
 // setting), rocks fed one after another from above, product leaving below the plates.
 PackingSpec jaw_crusher_scene(const Config& sc, int dimension, Rng& rng);
 
+// Scene builders: a whole set-up from a few numbers.
+//   {"type": "single_grain", "diameter": d, "shape": SHAPE (template, default sphere)}:
+//   one grain resting on the floor of a 3d × 3d box, the platen touching its top
+//   (Zhu & Zhao 2019 §4.2: a grain crushed between two plates).
+//   {"type": "jaw_crusher", ...}: jaw_crusher_scene above.
+PackingSpec scene_from_config(const Config& scene, int dimension, Rng& rng);
+
 }  // namespace crumble

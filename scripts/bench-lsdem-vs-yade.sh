@@ -3,7 +3,7 @@
 # (YADE's examples/levelSet/discharge.py: 1000 superellipsoids, 2000 nodes each), both on
 # one core, in one script. YADE's loose phase (steps 20–220) is timed here; its settled
 # phase (≈ 82 ms/step at ≈ 2500 overlaps, after ~1 h of simulation) is the figure recorded in
-# ../shared/bench/README.md. Needs build/crumble and YADE (apt-get install yade).
+# docs/performance.md. Needs build/crumble and YADE (apt-get install yade).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 steps=${STEPS:-200}

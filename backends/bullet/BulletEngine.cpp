@@ -1,10 +1,10 @@
 // Bullet adapter. Units: Bullet sees lengths multiplied by `scale_` (so a grain is about
-// one unit: Bullet's tolerances are absolute lengths tuned for ~1-unit objects, METHODS.md
-// §2), seconds and kilograms. Hence internal velocity = scale·v, force and impulse =
+// one unit: Bullet's tolerances are absolute lengths tuned for ~1-unit objects),
+// seconds and kilograms. Hence internal velocity = scale·v, force and impulse =
 // scale·(SI), inertia = scale²·(SI); every value leaves through to_si()/from the same
 // factors. With the automatic scale a power of two, these conversions are exact.
 #include "backends/bullet/BulletEngine.h"
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 #include <btBulletDynamicsCommon.h>
 
@@ -24,7 +24,7 @@
 #include "geometry/ConvexPieces.h"
 #include "core/Platen.h"
 
-// Mixing the float and double builds of Bullet corrupts memory silently (METHODS.md §2).
+// Mixing the float and double builds of Bullet corrupts memory silently.
 #ifndef BT_USE_DOUBLE_PRECISION
 #error "crumble_bullet must be compiled with BT_USE_DOUBLE_PRECISION (link PkgConfig::BULLET64)"
 #endif
@@ -515,7 +515,7 @@ struct BulletEngine::Impl {
 
   // A convex hull (shape frame) as Bullet's hull in the principal frame of `e`, in internal
   // units. Bullet inflates a hull by its margin: inset the hull by the same amount so the
-  // inflated surface is the grain's (METHODS.md §2). A sliver whose centroid is closer to a
+  // inflated surface is the grain's. A sliver whose centroid is closer to a
   // face than twice the margin gets a smaller margin; a flat hull (its centroid on or, by
   // rounding, outside a face) gets none and is taken as it is.
   std::unique_ptr<btConvexHullShape> hull_shape(const TriMesh& hull, double d, const ShapeEntry& e) const {
@@ -618,7 +618,7 @@ struct BulletEngine::Impl {
   // uninverted below 2.2e-16, and a mm grain's Jacobian has a determinant near I³ ≈ 1e-19.
   // Bullet applies its own (BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY, on by default) only
   // inside the contact solver, which skips an island without contacts, so a free tumbling
-  // grain did not precess at all (issue 10 extremes suite). Known limit: a mm grain in
+  // grain would not precess at all (tests/integration/extremes). Known limit: a mm grain in
   // contact still gets Bullet's ≈ 0 term; adding ours there changed the settled rigid
   // packing's void ratio by 8 % and made one ×1 mass-scaling case pass through a wall,
   // which needs its own study before it replaces Bullet's.

@@ -27,7 +27,7 @@
 //   mass_scale             > 0, default 1: grain and platen masses and inertias are
 //                          multiplied by it (Zhu & Zhao 2019 §5: 70); weights stay physical
 //
-// Model, as METHODS.md §2: restitution 0; friction √μ per grain (Bullet multiplies the
+// Model: restitution 0; friction √μ per grain (Bullet multiplies the
 // pair), Material::wall_friction against walls; rolling friction in Bullet's convention
 // (lever arm μr in the internal length unit, geometric mean for grain pairs); two
 // friction directions; contact force = impulse/Δt summed over a manifold's points. Floor
@@ -82,6 +82,13 @@ class BulletEngine final : public Engine {
   ~BulletEngine() override;
 
   std::string name() const override { return "bullet"; }
+  // On the Zhu & Zhao oedometer (docs/validation.md) a smaller step or more iterations did not
+  // stop a fragment creeping into a neighbour; the deep-penetration correction did.
+  std::string guard_advice() const override {
+    return "Push deep overlaps apart (engine.deep_penetration, e.g. 0.1), converge the contact forces "
+           "(engine.solver_iterations, engine.solver_tolerance 0), reduce the time step (time_step), or lower "
+           "loading.max_stress; a run stopped here resumes with any of these from its last checkpoint.";
+  }
   void set_container(const Container& c) override;
   void add_grain(const Grain& g) override;
   bool set_friction_scale(double scale) override;

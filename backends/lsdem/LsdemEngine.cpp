@@ -15,7 +15,7 @@
 
 namespace crumble {
 
-// ---- Per-shape data, shared by every grain of the shape (STYLE.md §12) ----
+// ---- Per-shape data, shared by every grain of the shape ----
 struct LsdemEngine::ShapeData {
   // Sphere tree over the nodes (median splits); leaves hold at most kLeaf nodes.
   struct Cluster {

@@ -5,7 +5,7 @@
 // found by looking up the nodes of the smaller grain (the master) in the other's level set:
 // penetration p_i = −φ_b(x_i), normal n_i = ∇φ_b/|∇φ_b| (Harmon et al. 2020 eqs. 3–4).
 //
-// Contact law (our decision, METHODS.md §4 leaves it open). Per contact (grain pair, or
+// Contact law (our decision; Harmon et al. 2020 leave it open). Per contact (grain pair, or
 // grain and wall) the overlap is the deepest node penetration δ = max p_i and the normal
 // force follows a point-contact law, F_n = k_n·δ ("linear") or (4/3)·E*·√R*·δ^{3/2}
 // ("hertz", R* from the grains' equivalent radii). F_n is then spread over the penetrating
@@ -112,6 +112,10 @@ class LsdemEngine final : public Engine {
   ~LsdemEngine() override;
 
   std::string name() const override { return "lsdem"; }
+  std::string guard_advice() const override {
+    return "Raise the contact stiffness (engine.kn) so overlaps stay small at this stress, reduce the time step "
+           "(time_step), or lower loading.max_stress.";
+  }
   void set_container(const Container& c) override;
   void add_grain(const Grain& g) override;
   void remove_grain(GrainId id) override;

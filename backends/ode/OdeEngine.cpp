@@ -1,5 +1,5 @@
 // ODE adapter. Units: ODE sees lengths multiplied by `scale` (a grain ≈ 1 unit; ODE's and
-// libccd's tolerances are absolute lengths, METHODS.md §2), seconds and kilograms. Hence
+// libccd's tolerances are absolute lengths), seconds and kilograms. Hence
 // internal velocity = scale·v, force = scale·F, inertia = scale²·I; every value leaves
 // through the same factors. With the automatic scale a power of two the conversions are
 // exact. Each body's origin is its centre of mass (dBodySetMass needs it there); the geometry
@@ -23,7 +23,7 @@
 #include <string>
 
 #include "core/Platen.h"
-#include "geometry/Format.h"
+#include "base/Format.h"
 #include "geometry/SymmetricEigen.h"
 
 // ode/precision.h picks dDOUBLE unless dIDESINGLE is set; the build states dIDEDOUBLE and

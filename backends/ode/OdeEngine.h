@@ -31,7 +31,7 @@
 //   concavity_tolerance    [0, 1], default 0.02; max_convex_pieces 1..64, default 8: as bullet's
 //
 // Model: restitution 0; Coulomb friction μ with dContactApprox1 (the friction pyramid is
-// scaled by the normal force, so μ is a Coulomb coefficient, METHODS.md §2): the grain
+// scaled by the normal force, so μ is a Coulomb coefficient): the grain
 // material's friction between grains (√(μa·μb) for mixed materials) and its wall_friction
 // against walls and the platen; rolling friction (dContactRolling, ODE ≥ 0.13) as a lever
 // arm μr in the internal length unit — the Bullet convention, so both engines resist
@@ -80,6 +80,9 @@ class OdeEngine final : public Engine {
   ~OdeEngine() override;
 
   std::string name() const override { return "ode"; }
+  std::string guard_advice() const override {
+    return "Reduce the time step (time_step), raise engine.solver_iterations, or lower loading.max_stress.";
+  }
   void set_container(const Container& c) override;
   void add_grain(const Grain& g) override;
   bool set_friction_scale(double scale) override;

@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "geometry/TetMesh.h"
+#include "geometry/cgal/TetMesh.h"
 #include "geometry/Vec3.h"
 
 namespace crumble::bb {

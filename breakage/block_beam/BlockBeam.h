@@ -8,7 +8,7 @@
 // Our copy of the paper gives the method in words and algorithm titles only (Algorithms 4,
 // 5 are figures we do not have) and prints no material table, so the following are our
 // decisions, each an option:
-// - Mesh: CGAL Mesh_3 on the grain's signed distance (geometry/TetMesh.h), target edge
+// - Mesh: CGAL Mesh_3 on the grain's signed distance (geometry/cgal/TetMesh.h), target edge
 //   d_e / blocks_per_diameter; a polyhedral child's sharp edges are approximated to
 //   facet_distance. The paper meshes one sphere and copies it to every grain (§2.1.2);
 //   we mesh each analysed grain (children are not spheres).
@@ -46,7 +46,7 @@
 #include "core/Config.h"
 #include "core/Engine.h"
 #include "core/Options.h"
-#include "geometry/TetMesh.h"
+#include "geometry/cgal/TetMesh.h"
 
 namespace crumble {
 
@@ -74,7 +74,7 @@ const OptionTable& block_beam_options();
 BbOptions bb_options_from_config(const Config& cfg);
 void validate(const BbOptions& o);
 
-// The blocks of a grain's shape (CGAL Mesh_3; geometry/TetMesh.h), with options o.
+// The blocks of a grain's shape (CGAL Mesh_3; geometry/cgal/TetMesh.h), with options o.
 TetMesh bb_mesh(const Shape& shape, const BbOptions& o);
 
 class BlockBeamModel final : public BreakageModel {

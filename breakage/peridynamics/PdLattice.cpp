@@ -1,5 +1,5 @@
 #include "breakage/peridynamics/PdLattice.h"
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 #include "breakage/peridynamics/PdSystem.h"
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 #include "breakage/peridynamics/PdKernel.h"
 

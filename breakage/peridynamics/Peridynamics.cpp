@@ -12,7 +12,7 @@
 #include "breakage/peridynamics/PdLattice.h"
 #include "breakage/peridynamics/PdSystem.h"
 #include "core/Weibull.h"
-#include "geometry/BuildCounters.h"
+#include "base/BuildCounters.h"
 
 namespace crumble {
 

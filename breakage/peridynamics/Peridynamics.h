@@ -1,4 +1,4 @@
-// Breakage model "peridynamics": Zhu & Zhao 2019 (§2.1, §3, §4; METHODS.md §1).
+// Breakage model "peridynamics": Zhu & Zhao 2019 (§2.1, §3, §4).
 // A grain selected by the screening is discretised on a cubic lattice, loaded by its
 // contact forces (ramped in time, the zone of the largest force fixed) and integrated
 // explicitly with the linear peridynamic solid and critical-stretch bonds until it splits

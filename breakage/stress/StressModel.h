@@ -1,4 +1,4 @@
-// Breakage model "stress": Harmon, Arthur & Andrade 2020, §3.1 and §3.3 (METHODS.md §5).
+// Breakage model "stress": Harmon, Arthur & Andrade 2020, §3.1 and §3.3.
 //
 // - Average stress σ̄ = (1/V) Σ x_c ⊗ F_c (eq. 5): x_c from the grain's centroid to the
 //   contact point, F_c the force on the grain; V the volume (2D: the area, forces per unit

@@ -1,5 +1,5 @@
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
-#include "geometry/Format.h"
+#include "base/Format.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,9 +12,9 @@
 #include <type_traits>
 #include <utility>
 
-#include "geometry/BuildCounters.h"
+#include "base/BuildCounters.h"
 #include "geometry/ConvexHull.h"
-#include "geometry/MeshClip.h"
+#include "geometry/cgal/MeshClip.h"
 
 namespace crumble {
 

@@ -1,4 +1,4 @@
-// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2, METHODS.md §3): child grains as
+// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2): child grains as
 // alpha-shape polyhedra of the clusters' boundary points (PointClusters), or as the cells
 // of the parent's mesh cut by planes (CuttingSurfaces); volumes rescaled so that the
 // children's total equals the parent's.
@@ -11,7 +11,7 @@
 #include "core/Options.h"
 #include "core/Engine.h"
 #include "core/FragmentBuilder.h"
-#include "geometry/AlphaShape.h"
+#include "geometry/cgal/AlphaShape.h"
 
 namespace crumble {
 

@@ -1,4 +1,4 @@
-// FragmentBuilder "level_set" (Harmon, Arthur & Andrade 2020, §3.2–3.3; METHODS.md §5):
+// FragmentBuilder "level_set" (Harmon, Arthur & Andrade 2020, §3.2–3.3):
 // children as level-set grains. CuttingSurfaces: φ3 = max(φ1, −φ2), φ4 = max(φ1, φ2)
 // (eqs. 14–15) per plane, every non-empty cell of the arrangement and every connected
 // piece a child. PointClusters (peridynamics): the parent's level set partitioned by

@@ -10,8 +10,8 @@
 
 #include "core/Config.h"
 #include "scenarios/ScenarioFactory.h"
-#include "scenarios/ShapeSpec.h"
-#include "scenarios/Tools.h"
+#include "core/ShapeSpec.h"
+#include "tools/ShapeCommand.h"
 
 namespace crumble::fuzz {
 

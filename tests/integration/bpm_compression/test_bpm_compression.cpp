@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scenarios/Writers.h"
+#include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

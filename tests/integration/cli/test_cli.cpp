@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scenarios/Registry.h"
-#include "scenarios/ThreadCheck.h"
+#include "run/ThreadCheck.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "crumble_config.h"
-#include "scenarios/Compare.h"
-#include "scenarios/RunPipeline.h"
-#include "scenarios/Writers.h"
+#include "tools/Compare.h"
+#include "run/RunPipeline.h"
+#include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

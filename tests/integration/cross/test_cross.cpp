@@ -1,4 +1,4 @@
-// The cross product (DESIGN.md "The three seams": any engine × any breakage model × any
+// The cross product (any engine × any breakage model × any
 // fragment builder must run): every registered engine × model × builder that supports the
 // dimension runs one tiny crushable packing through the CLI (cross_3d.json, cross_2d.json).
 // Each run must exit 0 with summary.json, break grains when the model can break (the model
@@ -10,8 +10,8 @@
 //   cross | dim | engine | model | builder | events | grains | mass error
 // (ctest -L cross -V, or the test binary itself).
 //
-// Each run also checks that it built only what its scene needs (issue 10 §3; summary.json
-// `representations_built`, geometry/BuildCounters.h): no level set on a Bullet/ODE run unless
+// Each run also checks that it built only what its scene needs (summary.json
+// `representations_built`, base/BuildCounters.h): no level set on a Bullet/ODE run unless
 // the level_set builder cuts a broken grain, no alpha shape or mesh clip on an lsdem run unless
 // the alpha_shape builder is chosen, and a peridynamics lattice only for a grain that passed
 // screening (never more lattices than analyses).
@@ -180,7 +180,7 @@ TEST(CrossRepresentations, AGrainBelowTheScreeningThresholdIsNeverDiscretised) {
   EXPECT_LE(lattices, analysed["analyses"].get<long>()) << analysed.dump(1);
 }
 
-// DESIGN.md "Grains and shapes": an LS-DEM run never builds a convex hull. With no output
+// A shape builds only the representations its engine asks for: an LS-DEM run never builds a convex hull. With no output
 // that draws the grains (shape.csv's sphericity and the VTK files need a surface mesh), a 3D
 // lsdem run builds one level set per distinct shape and nothing else.
 TEST(CrossRepresentations, AnLsdemRunBuildsOnlyLevelSets) {

@@ -1,4 +1,4 @@
-// Stability at the extremes (issue 10 §4): runs at the edges a user will reach, each a few
+// Stability at the extremes: runs at the edges a user will reach, each a few
 // seconds, through the CLI for every registered engine in every dimension it declares
 // (tests/support/Registered.h), on the cross product's tiny packings (tests/integration/cross)
 // or on small scenarios written here. Every run must
@@ -311,7 +311,7 @@ TEST_P(Extremes, WeibullModulusOneAndTwenty) {
 // ---------------------------------------------------------------- loading
 // 1000 MPa on a crushable packing is beyond what any contact law here carries: the run stops
 // with exit 1 on a guard (or an engine failure) whose message says what to change; it never
-// crashes (ODE used to abort on a non-finite quaternion) or writes NaN.
+// crashes (ODE aborts on a non-finite quaternion) or writes NaN.
 TEST_P(Extremes, ThousandMegapascalsOnACrushablePacking) {
   if (!has_model("stress", dim())) GTEST_SKIP() << "needs the stress model";
   json s = json::parse(slurp(cross_scenario(dim())));
@@ -448,8 +448,8 @@ TEST_P(Extremes, TenthOfAMillimetreAndFiftyMillimetresInOnePacking) {
 const std::string kNoBalanceScreening =
     " --set screening.max_unbalanced_force_ratio=0 --set screening.max_unbalanced_moment_ratio=0";
 
-// Zhu & Zhao 2019 §5's crushing limit: a grain of exactly 0.3 mm is analysed (it used to be
-// screened out by round-off) and crushed by peridynamics before the ramp ends.
+// Zhu & Zhao 2019 §5's crushing limit: a grain of exactly 0.3 mm is analysed (round-off must
+// not screen it out) and crushed by peridynamics before the ramp ends.
 TEST_P(Extremes3D, PeridynamicsGrainAtTheCrushingLimit) {
   if (!has_model("peridynamics", 3)) GTEST_SKIP() << "needs the peridynamics model";
   const Outcome r = run_case(src("scenarios/single_grain_pd.json") + " --set engine.type=" + engine() +

@@ -1,4 +1,4 @@
-// The energy of a free, undamped system (issue 10 §4): grains without gravity, contacts or
+// The energy of a free, undamped system: grains without gravity, contacts or
 // damping keep their kinetic energy, ½ m v² + ½ ω·I ω (I turned with the body), within 1 %
 // over 1e4 steps on every registered engine and dimension (public factory, as the
 // conformance suite builds them). The bodies tumble about axes that are not principal (an

@@ -1,6 +1,6 @@
 // Runs that go physically wrong stop with exit 1 and a message naming the broken invariant
-// (issue: never a wrong answer with exit 0). Each case is a reproduction that exited 0 with
-// an impossible void ratio before the guards existed; none may leave a summary.json, and
+// (never a wrong answer with exit 0). Each case would otherwise end with an impossible void
+// ratio; none may leave a summary.json, and
 // no row of series.csv(.part) may hold a void ratio <= 0.
 #include <gtest/gtest.h>
 

@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/Options.h"
-#include "scenarios/OptionDocs.h"
+#include "tools/OptionDocs.h"
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
 #include "tests/support/CliRunner.h"

@@ -1,4 +1,4 @@
-// The figures of an output folder (scenarios/Plots.h, scripts/crumble_plot.py): `crumble plot`
+// The figures of an output folder (output/Plots.h, scripts/crumble_plot.py): `crumble plot`
 // on a checked-in crushable run (data/zhu_zhao_quick_8MPa: the CSVs and JSON files of
 // oedometer_zhu_zhao_quick.json stopped with SIGINT at 8.56 MPa, 100 -> 235 grains, 105 breakage
 // events; no VTK files, so shape.png draws the means of shape.csv), the figures at the end of a tiny `crumble run`, a sweep
@@ -20,7 +20,7 @@ using crumble::testing_support::slurp;
 
 namespace {
 
-// What the binary tries (scenarios/Plots.cpp): python3 on PATH, then /usr/bin/python3.
+// What the binary tries (output/Plots.cpp): python3 on PATH, then /usr/bin/python3.
 bool have_matplotlib() {
   for (const char* py : {"python3", "/usr/bin/python3"}) {
     const std::string cmd = std::string(py) + " -c 'import matplotlib' >/dev/null 2>&1";

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scenarios/Writers.h"
+#include "output/Writers.h"
 
 #include "scenarios/Registry.h"
 #include "tests/support/CliRunner.h"

@@ -17,7 +17,7 @@ foreach(f bin/crumble include/crumble/core/BreakageModel.h include/crumble/scena
     message(FATAL_ERROR "cmake --install did not install ${f}")
   endif()
 endforeach()
-if(EXISTS ${prefix}/include/crumble/geometry/CgalMesh.h)
+if(EXISTS ${prefix}/include/crumble/geometry/cgal/CgalMesh.h)
   message(FATAL_ERROR "the SDK must not ship headers that need CGAL")
 endif()
 

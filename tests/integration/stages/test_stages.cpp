@@ -1,5 +1,5 @@
 // `crumble stages DIR`: the per-MPa cost table of a run, its power-law fits and the
-// extrapolation to a higher stress (scenarios/Stages.h), on a synthetic stages.csv whose
+// extrapolation to a higher stress (tools/Stages.h), on a synthetic stages.csv whose
 // answer is known in closed form, and its errors on bad input.
 #include <gtest/gtest.h>
 
@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scenarios/RunPipeline.h"
-#include "scenarios/Stages.h"
+#include "run/RunPipeline.h"
+#include "tools/Stages.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

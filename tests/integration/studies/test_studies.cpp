@@ -13,10 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include "core/Config.h"
-#include "scenarios/Compare.h"
-#include "scenarios/RunPipeline.h"
-#include "scenarios/Sweep.h"
-#include "scenarios/Writers.h"
+#include "tools/Compare.h"
+#include "run/RunPipeline.h"
+#include "tools/Sweep.h"
+#include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "scenarios/Writers.h"
+#include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;

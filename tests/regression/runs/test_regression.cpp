@@ -1,6 +1,6 @@
 // Regression tests: small runs of the shipped scenarios compared with checked-in reference
 // figures (tests/regression/data/*.json). Each figure carries its own tolerance, kept apart
-// from the physics tolerances of the unit tests (STYLE.md §6): single-grain figures are
+// from the physics tolerances of the unit tests: single-grain figures are
 // deterministic up to round-off (1e-6); packing figures come from chaotic dynamics, where
 // round-off differences between CPUs (e.g. libm or compiler differences in the peridynamics kernels)
 // grow, so they get a few per cent.

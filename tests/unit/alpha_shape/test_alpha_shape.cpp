@@ -1,5 +1,5 @@
-// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2, METHODS.md §3) and its geometry
-// (geometry/AlphaShape.h, geometry/MeshClip.h).
+// FragmentBuilder "alpha_shape" (Zhu & Zhao 2019 §3.2) and its geometry
+// (geometry/cgal/AlphaShape.h, geometry/cgal/MeshClip.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,9 +12,9 @@
 #include <nlohmann/json.hpp>
 
 #include "Lattice.h"
-#include "geometry/AlphaShape.h"
+#include "geometry/cgal/AlphaShape.h"
 #include "geometry/ConvexHull.h"
-#include "geometry/MeshClip.h"
+#include "geometry/cgal/MeshClip.h"
 #include "geometry/alpha_shape/AlphaShapeBuilder.h"
 #include "scenarios/Registry.h"
 
@@ -557,7 +557,7 @@ TEST(AlphaShapeBuilder, RegistryAndConfig) {
   EXPECT_THROW(fragment_builders().find("alpha_shape", "/fragments").make(cb, EngineContext{}), ConfigError);
 }
 
-// Time per child for the METHODS.md §3 reference case (half sphere of a 2 mm grain);
+// Time per child for the reference case (half sphere of a 2 mm grain);
 // reported, bounded loosely (the machine is shared).
 TEST(AlphaShapeBuilder, TimePerChild) {
   const auto parent = Shape::sphere(kD / 2);

@@ -8,7 +8,7 @@
 #include "breakage/block_beam/BbSystem.h"
 #include "breakage/block_beam/BlockBeam.h"
 #include "geometry/Shape.h"
-#include "geometry/TetMesh.h"
+#include "geometry/cgal/TetMesh.h"
 
 using namespace crumble;
 

@@ -62,7 +62,7 @@ Grain state_of(const Engine& e, const Grain& g0) {
 
 }  // namespace
 
-// (f) Double precision throughout (METHODS.md §2: mixing builds corrupts memory).
+// (f) Double precision throughout (mixing builds corrupts memory).
 TEST(BulletEngine, UsesDoublePrecisionBullet) {
   std::string why;
   EXPECT_TRUE(bullet_double_precision_ok(&why)) << why;

@@ -1,10 +1,10 @@
-// The ETA of the progress lines (scenarios/Progress.h) on synthetic runs whose remaining wall
+// The ETA of the progress lines (run/Progress.h) on synthetic runs whose remaining wall
 // time is known in closed form.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "scenarios/Progress.h"
+#include "run/Progress.h"
 
 using crumble::EtaEstimator;
 

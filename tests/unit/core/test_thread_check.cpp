@@ -1,7 +1,7 @@
-// The warning before a threaded run on busy CPUs (scenarios/ThreadCheck.h).
+// The warning before a threaded run on busy CPUs (run/ThreadCheck.h).
 #include <gtest/gtest.h>
 
-#include "scenarios/ThreadCheck.h"
+#include "run/ThreadCheck.h"
 
 using namespace crumble;
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "scenarios/ScenarioFactory.h"
-#include "scenarios/Writers.h"
+#include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
 using namespace crumble;

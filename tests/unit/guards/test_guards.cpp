@@ -22,7 +22,7 @@ Grain sphere_at(GrainId id, Vec3 p, double r = 1e-3) {
 GuardContext ctx(double budget = 1.0) {
   GuardContext at;
   at.step = 42;
-  at.engine = "bullet";
+  at.advice = "Raise engine.solver_iterations.";
   at.energy_budget = budget;
   return at;
 }
@@ -91,7 +91,7 @@ TEST(Guards, DeepOverlapFailsAndNamesTheLimit) {
   const std::string msg = failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); });
   EXPECT_NE(msg.find("overlaps grain 1"), std::string::npos) << msg;
   EXPECT_NE(msg.find("max_overlap_fraction"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("solver_iterations"), std::string::npos) << msg;  // Bullet's advice
+  EXPECT_NE(msg.find("solver_iterations"), std::string::npos) << msg;  // the engine's advice
   // Fragments of one grain (same origin) are born overlapping: not a failure.
   gs[0].origin = gs[1].origin = 5;
   EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 3, 0.01, gs, kMat, cs); }), "");

@@ -11,8 +11,8 @@
 #include "geometry/LevelSetGrid.h"
 #include "geometry/LevelSetSplit.h"
 #include "geometry/level_set/LevelSetBuilder.h"
-#include "scenarios/Checkpoint.h"
-#include "scenarios/ShapeSpec.h"
+#include "output/Checkpoint.h"
+#include "core/ShapeSpec.h"
 #include "tests/support/CliRunner.h"
 
 namespace crumble {

@@ -1,5 +1,5 @@
-// The sweep metrics (scenarios/Metrics.h) on hand-made run outputs, and the error–cost front
-// (scenarios/Sweep.h): each value is the figure put in, with its unit; the relative error is
+// The sweep metrics (tools/Metrics.h) on hand-made run outputs, and the error–cost front
+// (tools/Sweep.h): each value is the figure put in, with its unit; the relative error is
 // |x − x_ref| / |x_ref| exactly (1e-15); the front follows Pareto dominance on small cases
 // worked by hand.
 #include <gtest/gtest.h>
@@ -11,10 +11,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scenarios/Compare.h"
-#include "scenarios/Metrics.h"
-#include "scenarios/RunPipeline.h"
-#include "scenarios/Sweep.h"
+#include "output/Recorders.h"
+#include "tools/Compare.h"
+#include "tools/Metrics.h"
+#include "run/RunPipeline.h"
+#include "tools/Sweep.h"
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;

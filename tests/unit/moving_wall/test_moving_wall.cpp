@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "backends/lsdem/LsdemEngine.h"
-#include "core/Analysis.h"
+#include "core/Measures.h"
 #include "core/MovingWall.h"
 #include "scenarios/ScenarioFactory.h"
 

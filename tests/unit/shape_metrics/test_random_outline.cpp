@@ -9,7 +9,7 @@
 
 #include "core/Config.h"
 #include "geometry/ShapeMetrics.h"
-#include "scenarios/ShapeSpec.h"
+#include "core/ShapeSpec.h"
 
 namespace crumble {
 namespace {

@@ -1,0 +1,132 @@
+#include "tools/RawBulletBench.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "geometry/ConvexHull.h"
+#include "geometry/SymmetricEigen.h"
+#include "geometry/TriMesh.h"
+
+namespace crumble {
+
+namespace {
+btVector3 bt(const Vec3& v) { return {v.x, v.y, v.z}; }
+btQuaternion bt(const Quat& q) { return {q.x, q.y, q.z, q.w}; }
+
+class RawBulletWorld final : public RawWorld {
+ public:
+  explicit RawBulletWorld(const RawScene& sc);
+  ~RawBulletWorld() override {
+    for (auto& b : bodies) world.removeRigidBody(b.get());
+  }
+  void step() override { world.stepSimulation(dt, 0); }
+  int contact_pairs() const override {
+    int n = 0;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+      const btPersistentManifold* mf = dispatcher.getManifoldByIndexInternal(m);
+      bool pushed = false;
+      for (int p = 0; p < mf->getNumContacts(); ++p) pushed = pushed || mf->getContactPoint(p).m_appliedImpulse > 0;
+      n += pushed ? 1 : 0;
+    }
+    return n;
+  }
+
+ private:
+  double dt;
+  btDefaultCollisionConfiguration config;
+  mutable btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;
+  std::vector<std::unique_ptr<btDefaultMotionState>> states;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+};
+
+RawBulletWorld::RawBulletWorld(const RawScene& sc) : dt(sc.dt) {
+  const double s = sc.length_scale;
+  dispatcher.setDispatcherFlags(dispatcher.getDispatcherFlags() |
+                                btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD);
+  // Mass scaling keeps weights physical: the scaled bodies fall at g / mass_scale.
+  world.setGravity(bt(sc.gravity * (s / sc.mass_scale)));
+  world.getDispatchInfo().m_deterministicOverlappingPairs = true;
+  btContactSolverInfo& si = world.getSolverInfo();
+  si.m_numIterations = sc.solver_iterations;
+  si.m_erp = si.m_erp2 = sc.erp;
+  si.m_splitImpulse = 0;
+  si.m_restitution = 0;
+  si.m_solverMode = SOLVER_USE_WARMSTARTING | SOLVER_USE_2_FRICTION_DIRECTIONS;
+  si.m_leastSquaresResidualThreshold = 0;
+
+  auto add_static = [&](btCollisionShape* shape, const btTransform& t, double friction) {
+    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape);
+    info.m_startWorldTransform = t;
+    info.m_friction = friction;
+    bodies.push_back(std::make_unique<btRigidBody>(info));
+    world.addRigidBody(bodies.back().get());
+  };
+  // Bullet multiplies the two friction values: grains carry √μ, walls μ_wall / √μ of the
+  // first body (one material in the benchmark scenes).
+  const double grain_f = sc.bodies.empty() ? 0 : std::sqrt(sc.bodies.front().friction);
+  const double wall_f = grain_f > 0 ? sc.wall_friction / grain_f : 0;
+  const struct { Vec3 n; double c; } planes[] = {
+      {{0, 0, 1}, 0}, {{1, 0, 0}, 0}, {{-1, 0, 0}, -sc.lx}, {{0, 1, 0}, 0}, {{0, -1, 0}, -sc.ly}};
+  for (const auto& p : planes) {
+    shapes.push_back(std::make_unique<btStaticPlaneShape>(bt(p.n), p.c * s));
+    add_static(shapes.back().get(), btTransform::getIdentity(), wall_f);
+  }
+  const double hz = 0.05 * sc.lx * s;
+  shapes.push_back(std::make_unique<btBoxShape>(btVector3(0.5 * sc.lx * s, 0.5 * sc.ly * s, hz)));
+  btTransform lid = btTransform::getIdentity();
+  lid.setOrigin(btVector3(0.5 * sc.lx * s, 0.5 * sc.ly * s, sc.platen_z * s + hz));
+  add_static(shapes.back().get(), lid, wall_f);
+
+  for (const RawBody& b : sc.bodies) {
+    if (b.hull.vertices.size() < 4 || !(b.mass > 0)) throw std::invalid_argument("raw bullet bench: a body without volume");
+    const PrincipalAxes pa = principal_axes(b.inertia);
+    const Quat to_principal = pa.rotation.conjugate();
+    // Bullet inflates a hull by its margin: inset it by the margin first (Bullet's manual,
+    // "collision margin"), margin_fraction of the equivalent diameter.
+    const double d = std::cbrt(6 * polyhedron_mass_properties(b.hull).volume / M_PI);
+    const double inradius = convex_inradius_about_centroid(b.hull);
+    const double margin = inradius > 0 ? std::min(sc.margin_fraction * d, 0.5 * inradius) : 0;
+    const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(b.hull, margin) : b.hull.vertices;
+    std::vector<btScalar> pts;
+    for (const Vec3& v : inset) {
+      const Vec3 p = to_principal.rotate(v) * s;
+      pts.insert(pts.end(), {p.x, p.y, p.z});
+    }
+    auto hull = std::make_unique<btConvexHullShape>(pts.data(), static_cast<int>(inset.size()),
+                                                    static_cast<int>(3 * sizeof(btScalar)));
+    hull->setMargin(margin * s);
+    hull->recalcLocalAabb();
+    const double m = b.mass * sc.mass_scale;
+    const btVector3 inertia = bt(pa.moments * (sc.mass_scale * s * s));
+    btTransform t;
+    t.setOrigin(bt(b.com * s));
+    t.setRotation(bt((b.orientation * pa.rotation).normalized()));
+    states.push_back(std::make_unique<btDefaultMotionState>(t));
+    btRigidBody::btRigidBodyConstructionInfo info(m, states.back().get(), hull.get(), inertia);
+    info.m_friction = std::sqrt(b.friction);
+    info.m_rollingFriction = b.rolling_friction;
+    bodies.push_back(std::make_unique<btRigidBody>(info));
+    btRigidBody* body = bodies.back().get();
+    body->setActivationState(DISABLE_DEACTIVATION);
+    body->setLinearVelocity(bt(b.velocity * s));
+    body->setAngularVelocity(bt(b.angular_velocity));
+    world.addRigidBody(body);
+    shapes.push_back(std::move(hull));
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<RawWorld> make_raw_bullet_world(const RawScene& scene) {
+  return std::make_unique<RawBulletWorld>(scene);
+}
+
+}  // namespace crumble
