@@ -17,27 +17,38 @@ struct ConcaveShapeOptions {
   int max_convex_pieces = 8;
 };
 
-// The three table lines; `how` names the engine's compound ("btCompoundShape").
-inline OptionTable concave_shape_options(const std::string& how) {
-  const ConcaveShapeOptions d;
+// The three table lines, bound to the ConcaveShapeOptions member `m` of the engine's settings
+// struct S (opt::nested); `how` names the engine's compound ("btCompoundShape").
+template <class S>
+OptionTable concave_shape_options(const std::string& how, ConcaveShapeOptions S::*m) {
+  using C = ConcaveShapeOptions;
   return {
-      opt::choice("concave_shapes", d.convex_pieces ? "convex_pieces" : "convex_hull", {"convex_pieces", "convex_hull"},
-                  "a concave polyhedral grain (a fragment kept concave, Zhu & Zhao 2019 §3.2) collides as convex pieces "
-                  "that cover it (" + how + "), or as its convex hull (more solid than the grain, contacts over its "
-                  "concavities)"),
-      opt::number("concavity_tolerance", d.concavity_tolerance, 0, 1, "",
+      opt::mapped_choice("concave_shapes", opt::nested(m, &C::convex_pieces),
+                         {{"convex_pieces", true}, {"convex_hull", false}},
+                         "a concave polyhedral grain (a fragment kept concave, Zhu & Zhao 2019 §3.2) collides as convex "
+                         "pieces that cover it (" + how + "), or as its convex hull (more solid than the grain, contacts "
+                         "over its concavities)"),
+      opt::number("concavity_tolerance", opt::nested(m, &C::concavity_tolerance), 0, 1, "",
                   "convex_pieces: a polyhedron whose hull exceeds its volume by more than this fraction is cut into "
                   "pieces until their hulls do (or max_convex_pieces)"),
-      opt::integer("max_convex_pieces", d.max_convex_pieces, 1, 64, "convex pieces of one concave grain at most"),
+      opt::integer("max_convex_pieces", opt::nested(m, &C::max_convex_pieces), 1, 64,
+                    "convex pieces of one concave grain at most"),
   };
 }
 
+// The same lines bound to a ConcaveShapeOptions of its own (read by `read_concave_shape_options`).
+struct ConcaveShapeSettings {
+  ConcaveShapeOptions concave;
+};
+inline OptionTable concave_shape_options(const std::string& how) {
+  return concave_shape_options(how, &ConcaveShapeSettings::concave);
+}
+
+// Reads the three options from the engine's section (the keys of the table above).
 inline ConcaveShapeOptions read_concave_shape_options(const Options& r) {
-  ConcaveShapeOptions o;
-  o.convex_pieces = r.string("concave_shapes") == "convex_pieces";
-  o.concavity_tolerance = r.number("concavity_tolerance");
-  o.max_convex_pieces = static_cast<int>(r.integer("max_convex_pieces"));
-  return o;
+  ConcaveShapeSettings s;
+  read_options(r.config(), concave_shape_options(""), s);
+  return s.concave;
 }
 
 // The convex pieces (their hulls, shape frame) a polyhedral `shape` collides as: none when

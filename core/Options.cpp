@@ -73,7 +73,60 @@ OptionSpec choice(std::string key, std::string def, std::vector<std::string> cho
   return s;
 }
 
+OptionSpec string(std::string key, std::string def, std::string doc) {
+  OptionSpec s;
+  s.key = std::move(key);
+  s.kind = Kind::String;
+  s.def = std::move(def);
+  s.doc = std::move(doc);
+  return s;
+}
+
+OptionSpec numbers(std::string key, std::vector<double> def, std::string unit, std::string doc) {
+  OptionSpec s;
+  s.key = std::move(key);
+  s.kind = Kind::Numbers;
+  s.def = std::move(def);
+  s.unit = std::move(unit);
+  s.doc = std::move(doc);
+  return s;
+}
+
+OptionSpec vec3(std::string key, Vec3 def, std::string unit, std::string doc) {
+  OptionSpec s = numbers(std::move(key), {def.x, def.y, def.z}, std::move(unit), std::move(doc));
+  s.kind = Kind::Vector3;
+  return s;
+}
+
+OptionSpec unsigned_integer(std::string key, std::uint64_t def, std::string doc) {
+  OptionSpec s;
+  s.key = std::move(key);
+  s.kind = Kind::Unsigned;
+  s.def = def;
+  s.doc = std::move(doc);
+  return s;
+}
+
 }  // namespace opt
+
+OptionSpec OptionSpec::depends(std::string doc) const {
+  OptionSpec c = *this;
+  c.def = std::monostate{};
+  c.default_doc = std::move(doc);
+  return c;
+}
+
+OptionSpec OptionSpec::required_key() const {
+  OptionSpec c = depends("required");
+  c.required = true;
+  return c;
+}
+
+OptionSpec OptionSpec::if_given(std::string doc) const {
+  OptionSpec c = depends(std::move(doc));
+  c.optional = true;
+  return c;
+}
 
 namespace {
 
@@ -97,7 +150,119 @@ double read_number(const Config& cfg, const OptionSpec& s, double def) {
   return v;
 }
 
+template <class T>
+const T& default_as(const OptionSpec& s, const OptionSpec::Default& def) {
+  if (const T* v = std::get_if<T>(&def)) return *v;
+  programming_error("'" + s.key + "' is read without a default of its type");
+}
+
+// One option's value as the scenario gives it, or `def` (written back); a required option
+// without a value is Config's "required ... is missing".
+OptionSpec::Default read_value(const Config& cfg, const OptionSpec& s, const OptionSpec::Default& def) {
+  if (s.required && !cfg.has(s.key)) {
+    switch (s.kind) {
+      case Kind::Positive: cfg.positive(s.key); break;
+      case Kind::Number: cfg.number(s.key); break;
+      case Kind::String:
+      case Kind::Choice: cfg.string(s.key); break;
+      default: cfg.numbers(s.key); break;
+    }
+  }
+  const bool given = cfg.has(s.key);
+  switch (s.kind) {
+    case Kind::Number:
+    case Kind::Positive: return read_number(cfg, s, given ? 0.0 : default_as<double>(s, def));
+    case Kind::Integer:
+      return cfg.integer(s.key, given ? 0L : default_as<long>(s, def), s.int_min, s.int_max);
+    case Kind::Unsigned: return cfg.unsigned_integer(s.key, given ? 0 : default_as<std::uint64_t>(s, def));
+    case Kind::Boolean: return cfg.boolean(s.key, given ? false : default_as<bool>(s, def));
+    case Kind::String: return cfg.string(s.key, given ? std::string() : default_as<std::string>(s, def));
+    case Kind::Choice: return cfg.choice(s.key, given ? s.choices.front() : default_as<std::string>(s, def), s.choices);
+    case Kind::Numbers:
+      return cfg.numbers(s.key, given ? std::vector<double>() : default_as<std::vector<double>>(s, def));
+    case Kind::Vector3: {
+      const auto& d = given ? std::vector<double>{0, 0, 0} : default_as<std::vector<double>>(s, def);
+      const Vec3 v = cfg.vec3(s.key, {d[0], d[1], d[2]});
+      return std::vector<double>{v.x, v.y, v.z};
+    }
+  }
+  return {};
+}
+
+// The text of a value in an error message.
+std::string value_text(const OptionSpec::Default& v) {
+  if (auto* d = std::get_if<double>(&v)) return fmt_num(*d);
+  if (auto* l = std::get_if<long>(&v)) return std::to_string(*l);
+  if (auto* u = std::get_if<std::uint64_t>(&v)) return std::to_string(*u);
+  if (auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  if (auto* t = std::get_if<std::string>(&v)) return "'" + *t + "'";
+  return "(a list)";
+}
+
+// Whether a value lies in the option's declared range or choices.
+bool in_range(const OptionSpec& s, const OptionSpec::Default& v) {
+  switch (s.kind) {
+    case Kind::Number: {
+      const double x = std::get<double>(v);
+      return std::isfinite(x) && x >= s.min && x <= s.max;
+    }
+    case Kind::Positive: {
+      const double x = std::get<double>(v);
+      return std::isfinite(x) && x > 0 && (s.max_open ? x < s.max : x <= s.max);
+    }
+    case Kind::Integer: {
+      const long x = std::get<long>(v);
+      return x >= s.int_min && x <= s.int_max;
+    }
+    case Kind::Choice:
+      for (const auto& c : s.choices)
+        if (c == std::get<std::string>(v)) return true;
+      return false;
+    default: return true;
+  }
+}
+
+const OptionBinding& binding_of(const OptionSpec& s, std::type_index type) {
+  if (s.binding->owner != type)
+    programming_error("'" + s.key + "' is bound to a member of another settings struct than the one read");
+  return *s.binding;
+}
+
 }  // namespace
+
+void read_bound_options(const Config& cfg, const OptionTable& table, void* settings, std::type_index type) {
+  for (const auto& s : table) {
+    if (!s.binding) continue;
+    const OptionBinding& b = binding_of(s, type);
+    if (b.when && !b.when(settings)) continue;
+    if (s.optional && !cfg.has(s.key)) continue;
+    OptionSpec::Default def = s.def;
+    if (b.default_of) def = b.default_of(settings);
+    else if (std::holds_alternative<std::monostate>(def)) def = b.get(settings);
+    b.set(settings, read_value(cfg, s, def));
+  }
+}
+
+void check_bound_options(const OptionTable& table, const void* settings, std::type_index type, const std::string& who) {
+  for (const auto& s : table) {
+    if (!s.binding) continue;
+    const OptionBinding& b = binding_of(s, type);
+    if (b.when && !b.when(settings)) continue;
+    const OptionSpec::Default v = b.get(settings);
+    if (in_range(s, v)) continue;
+    const std::string range = option_range_text(s);
+    const std::string must = s.kind == Kind::Choice                     ? "must be one of: "
+                             : range[0] == '[' || range[0] == '(' ? "must lie in "
+                                                                   : "must be ";
+    throw std::invalid_argument(who + ": " + s.key + " " + must + range + ", got " + value_text(v));
+  }
+}
+
+const OptionSpec& find_option(const OptionTable& table, const std::string& key) {
+  for (const auto& s : table)
+    if (s.key == key) return s;
+  programming_error("'" + key + "' is not declared in the option table");
+}
 
 Options::Options(const Config& cfg, const OptionTable& table) : cfg_(cfg), table_(table) {}
 
@@ -151,17 +316,9 @@ bool Options::has(const std::string& key) const {
 }
 
 void check_option(const Config& cfg, const OptionSpec& s) {
-  switch (s.kind) {
-    case Kind::Number:
-    case Kind::Positive:
-      // A default that depends on other options: any value in the range will do here.
-      read_number(cfg, s, std::holds_alternative<double>(s.def) ? std::get<double>(s.def) : 1.0);
-      return;
-    case Kind::Integer: cfg.integer(s.key, std::get<long>(s.def), s.int_min, s.int_max); return;
-    case Kind::Boolean: cfg.boolean(s.key, std::get<bool>(s.def)); return;
-    case Kind::String: cfg.string(s.key, std::get<std::string>(s.def)); return;
-    case Kind::Choice: cfg.choice(s.key, std::get<std::string>(s.def), s.choices); return;
-  }
+  // A default that depends on other options: any value in the range will do here.
+  if (std::holds_alternative<std::monostate>(s.def) && !cfg.has(s.key)) return;
+  read_value(cfg, s, s.def);
 }
 
 namespace {
@@ -222,6 +379,9 @@ std::string option_kind_name(const OptionSpec& s) {
     case Kind::Boolean: return "boolean";
     case Kind::String: return "string";
     case Kind::Choice: return "choice";
+    case Kind::Numbers: return "numbers";
+    case Kind::Vector3: return "vector";
+    case Kind::Unsigned: return "integer";
   }
   return "?";
 }
@@ -231,6 +391,12 @@ std::string option_default_text(const OptionSpec& s) {
   if (auto* d = std::get_if<double>(&s.def)) return short_num(*d) + (s.unit.empty() ? "" : " " + s.unit);
   if (auto* l = std::get_if<long>(&s.def)) return std::to_string(*l);
   if (auto* b = std::get_if<bool>(&s.def)) return *b ? "true" : "false";
+  if (auto* u = std::get_if<std::uint64_t>(&s.def)) return std::to_string(*u);
+  if (auto* v = std::get_if<std::vector<double>>(&s.def)) {
+    std::string t = "[";
+    for (std::size_t i = 0; i < v->size(); ++i) t += (i ? ", " : "") + short_num((*v)[i]);
+    return t + "]" + (s.unit.empty() ? "" : " " + s.unit);
+  }
   return "\"" + std::get<std::string>(s.def) + "\"";
 }
 
@@ -251,6 +417,9 @@ std::string option_range_text(const OptionSpec& s) {
     case Kind::Boolean: return "true, false";
     case Kind::String: return "";
     case Kind::Choice: return joined(s.choices);
+    case Kind::Numbers: return "";
+    case Kind::Vector3: return "3 numbers";
+    case Kind::Unsigned: return "[0, 2^64 − 1]";
   }
   return "";
 }

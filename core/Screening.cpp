@@ -106,15 +106,36 @@ void ScreeningCounts::add(const ScreeningResult& r) {
 }
 
 const OptionTable& screening_options() {
+  using S = ScreeningSettings;
   static const OptionTable t = [] {
-    OptionSpec s = opt::number(
-        "skip_intact_tolerance", 0, 0, 10, "",
-        "a grain whose last analysis left it whole is not analysed again while no contact partner's force on it "
-        "(per partner, body frame) changed by more than this fraction of that analysis's largest force; 0 = "
-        "analyse at every check (not in Zhu & Zhao 2019: docs/performance.md, \"Fewer analyses\")");
-    s.def = std::monostate{};
-    s.default_doc = "the breakage model's: 0 (off) for every built-in model";
-    return OptionTable{s};
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::string model = "the breakage model's";
+    return OptionTable{
+        opt::number("min_diameter", &S::min_diameter, 0, inf, "m", "smaller grains are never analysed")
+            .depends(model),
+        opt::boolean("force_threshold", &S::force_threshold,
+                     "a grain is analysed only when its largest contact force reaches the model's threshold")
+            .depends(model),
+        opt::number("max_unbalanced_force_ratio", &S::max_unbalanced_force_ratio, -inf, inf, "",
+                    "|Σ F| / Σ |F| of the grain's contacts at most this (≤ 0 disables)")
+            .depends(model),
+        opt::number("max_unbalanced_moment_ratio", &S::max_unbalanced_moment_ratio, -inf, inf, "",
+                    "|Σ M| / Σ |M| at most this (≤ 0 disables)")
+            .depends(model),
+        opt::integer("min_contacts", &S::min_contacts, 1, std::numeric_limits<long>::max(),
+                     "fewer contacts: not analysed")
+            .depends(model),
+        opt::boolean("moment_couples", &S::moment_couples,
+                     "the contacts' couples (rolling resistance) count in the unbalanced moment; false: the moments "
+                     "of the contact forces only")
+            .depends(model),
+        opt::number("skip_intact_tolerance", &S::skip_intact_tolerance, 0, 10, "",
+                    "a grain whose last analysis left it whole is not analysed again while no contact partner's force "
+                    "on it (per partner, body frame) changed by more than this fraction of that analysis's largest "
+                    "force; 0 = analyse at every check (not in Zhu & Zhao 2019: docs/performance.md, \"Fewer "
+                    "analyses\")")
+            .depends("the breakage model's: 0 (off) for every built-in model"),
+    };
   }();
   return t;
 }

@@ -20,17 +20,7 @@ namespace crumble {
 namespace fs = std::filesystem;
 
 const OptionTable& vtk_output_options() {
-  static const OptionTable t = {
-      opt::integer("vtk_every", 0, 0, std::numeric_limits<long>::max(),
-                   "steps between ParaView snapshots (vtk/, grains.pvd, scene.pvd; docs/output.md); 0 = none"),
-      opt::boolean("vtk_final", true, "a ParaView snapshot of the final state"),
-      opt::boolean("vtk_contacts", false,
-                   "each snapshot adds vtk/contacts_*.vtp: one line per contact (centroid to centroid, or to the "
-                   "contact point for a wall) with its normal force magnitude and force vector"),
-      opt::boolean("vtk_analyses", false,
-                   "every breakage whose analysis returns per-point data (peridynamics: the lattice with damage, "
-                   "piece and displacement per point) is written as vtk/analysis_*.vtp, listed in analyses.pvd"),
-  };
+  static const OptionTable t = vtk_output_options_of<VtkOutputSettings>();
   return t;
 }
 

@@ -23,6 +23,28 @@
 namespace crumble {
 
 // The output options this family reads ("output" object of a scenario).
+struct VtkOutputSettings {
+  long vtk_every = 0;         // steps between VTK snapshots (0 = none)
+  bool vtk_final = true;      // write the final state as VTK
+  bool vtk_contacts = false;  // contact-force lines in each VTK snapshot
+  bool vtk_analyses = false;  // per-point data of breakage analyses (vtk/analysis_*.vtp)
+};
+// Bound to the VtkOutputSettings base of S (the scenario's output settings).
+template <class S>
+OptionTable vtk_output_options_of() {
+  using V = VtkOutputSettings;
+  return {
+      opt::integer("vtk_every", static_cast<long S::*>(&V::vtk_every), 0, std::numeric_limits<long>::max(),
+                   "steps between ParaView snapshots (vtk/, grains.pvd, scene.pvd; docs/output.md); 0 = none"),
+      opt::boolean("vtk_final", static_cast<bool S::*>(&V::vtk_final), "a ParaView snapshot of the final state"),
+      opt::boolean("vtk_contacts", static_cast<bool S::*>(&V::vtk_contacts),
+                   "each snapshot adds vtk/contacts_*.vtp: one line per contact (centroid to centroid, or to the "
+                   "contact point for a wall) with its normal force magnitude and force vector"),
+      opt::boolean("vtk_analyses", static_cast<bool S::*>(&V::vtk_analyses),
+                   "every breakage whose analysis returns per-point data (peridynamics: the lattice with damage, "
+                   "piece and displacement per point) is written as vtk/analysis_*.vtp, listed in analyses.pvd"),
+  };
+}
 const OptionTable& vtk_output_options();
 
 // One VTK PolyData piece in the XML format (.vtp). Cells are of one kind per piece

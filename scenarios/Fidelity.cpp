@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Config.h"
+#include "scenarios/Sections.h"
 
 namespace crumble {
 
@@ -74,11 +75,11 @@ std::vector<std::string> apply_fidelity(Json& doc) {
     throw ConfigError("/fidelity", "unknown preset '" + preset + "'; expected one of: " + known +
                                        " (docs/speed-accuracy.md), or leave 'fidelity' out");
   const int dim = doc.contains("dimension") && doc["dimension"].is_number() && doc["dimension"].get<double>() == 2 ? 2 : 3;
-  const std::string engine = selected(doc, "engine", "bullet");
-  const std::string breakage = selected(doc, "breakage", "none");
+  const DefaultImplementations& def = default_implementations(dim);
+  const std::string engine = selected(doc, "engine", def.engine);
+  const std::string breakage = selected(doc, "breakage", def.breakage);
   const std::string fragments =
-      breakage != "none" || doc.contains("fragments") ? selected(doc, "fragments", dim == 3 ? "alpha_shape" : "level_set")
-                                                      : "";
+      breakage != "none" || doc.contains("fragments") ? selected(doc, "fragments", def.fragments) : "";
   for (const auto& k : fidelity_knobs()) {
     const std::string& active = k.seam == "engine" ? engine : k.seam == "breakage" ? breakage : fragments;
     if (active.empty() || active != k.implementation) continue;

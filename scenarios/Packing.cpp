@@ -6,11 +6,14 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <sstream>
 #include <unordered_map>
 
 #include "base/Format.h"
 #include "output/Checkpoint.h"
 #include "core/ShapeSpec.h"
+#include "scenarios/Sections.h"
 
 namespace crumble {
 
@@ -56,236 +59,252 @@ Json scaled_spec(const Json& tmpl, double factor) {
   return j;
 }
 
+namespace {
+
+// "psd": [[diameter_m, fraction_passing], …], increasing, ending at 1.
+std::vector<PsdPoint> psd_from(const Config& pc) {
+  std::vector<PsdPoint> psd;
+  const auto& pj = pc.raw("psd");
+  if (!pj.is_array() || pj.size() < 2) pc.fail("psd", "expected at least two [diameter_m, fraction_passing] pairs");
+  for (std::size_t i = 0; i < pj.size(); ++i) {
+    const std::string where = "psd/" + std::to_string(i);
+    if (!pj[i].is_array() || pj[i].size() != 2 || !pj[i][0].is_number() || !pj[i][1].is_number())
+      pc.fail(where, "expected [diameter_m, fraction_passing]");
+    PsdPoint p{pj[i][0].get<double>(), pj[i][1].get<double>()};
+    if (!(p.diameter > 0) || !std::isfinite(p.diameter)) pc.fail(where + "/0", "diameter must be > 0");
+    if (!(p.passing >= 0 && p.passing <= 1)) pc.fail(where + "/1", "fraction passing must be in [0, 1]");
+    if (i > 0 && (p.diameter <= psd.back().diameter || p.passing < psd.back().passing))
+      pc.fail(where, "PSD must increase in diameter and not decrease in fraction passing");
+    psd.push_back(p);
+  }
+  if (psd.back().passing != 1.0) pc.fail("psd", "the last point must have fraction passing 1");
+  return psd;
+}
+
+// The shape templates of a cloud (unit size) with their JSON: one template, several drawn
+// uniformly per grain, or (2D) a pool of generated outlines ({"type": "pool"}: one each).
+struct Templates {
+  std::vector<Shape::Ptr> shapes;
+  std::vector<Json> specs;
+};
+
+Templates templates_from(const Config& pc, int dim) {
+  Templates t;
+  auto add = [&](const Config& sc) {
+    // (A "type" that is not a string is left to shape_from_config's error.)
+    const Json& d = sc.doc();
+    if (dim == 2 && d.is_object() && d.contains("type") && d["type"].is_string() && d["type"] == "pool") {
+      for (Json spec : shape_pool(sc)) {
+        Config one(spec);
+        t.shapes.push_back(shape_from_config(one, dim, /*unit_size=*/true));
+        t.specs.push_back(spec);
+      }
+      return;
+    }
+    t.shapes.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
+    t.specs.push_back(sc.doc());
+  };
+  if (pc.doc().contains("shape") && pc.doc()["shape"].is_array()) {
+    for (auto& sc : pc.children("shape")) add(sc);
+    if (t.shapes.empty()) pc.fail("shape", "needs at least one shape template");
+  } else {
+    add(pc.child("shape"));
+  }
+  return t;
+}
+
+// Random sequential addition without overlap of bounding spheres, largest first (the grains
+// of `shapes` inside the container up to `top`). Placed grains are binned on a grid of cell
+// 2·rmax (>= any r + rad[q]), so a trial point is checked against the grains of its own and
+// the neighbouring cells only: the same accept/reject decisions as checking every grain, in
+// O(N) instead of O(N²). A grain too large for the box fails at `size_key`.
+std::vector<Vec3> place_cloud(const Config& pc, const std::vector<Shape::Ptr>& shapes, const std::vector<double>& diam,
+                              const Container& box, double top, double rmax, int dim, const std::string& size_key,
+                              Rng& rng) {
+  std::vector<std::size_t> order(shapes.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return diam[a] > diam[b]; });
+  std::vector<Vec3> pos(shapes.size());
+  std::vector<double> rad(shapes.size());
+  const double cell = 2 * rmax;
+  // Clamped before the conversion (a double beyond long's range does not convert).
+  auto cell_of = [&](double x) { return static_cast<long>(std::clamp(std::floor(x / cell), -4e18, 4e18)); };
+  std::unordered_map<unsigned long long, std::vector<std::size_t>> bins;
+  // 2^21 cells per axis, wrapping modulo 2^64 (unsigned: defined) for containers with more
+  // cells than that (a 1e9 m box of mm grains would overflow a signed key): two cells sharing a key only add distance checks, never change a decision.
+  auto key = [](long i, long j, long k) {
+    using U = unsigned long long;
+    return (static_cast<U>(i) * 2097152ULL + static_cast<U>(j)) * 2097152ULL + static_cast<U>(k);
+  };
+  auto free_at = [&](const Vec3& p, double r) {
+    const long ci = cell_of(p.x), cj = cell_of(p.y), ck = cell_of(p.z);
+    for (long di = -1; di <= 1; ++di)
+      for (long dj = -1; dj <= 1; ++dj)
+        for (long dk = -1; dk <= 1; ++dk) {
+          auto it = bins.find(key(ci + di, cj + dj, ck + dk));
+          if (it == bins.end()) continue;
+          for (std::size_t q : it->second)
+            if (norm2(p - pos[q]) < (r + rad[q]) * (r + rad[q])) return false;
+        }
+    return true;
+  };
+  for (std::size_t k : order) {
+    const double r = shapes[k]->bounding_radius() * 1.01;
+    rad[k] = r;
+    if (2 * r > box.lx || (dim == 3 && 2 * r > box.ly) || 2 * r > top) {
+      const std::string which = 2 * r > box.lx                ? "container.lx = " + fmt_num(box.lx)
+                                : dim == 3 && 2 * r > box.ly ? "container.ly = " + fmt_num(box.ly)
+                                                             : "container.height = " + fmt_num(top);
+      pc.fail(size_key, "a grain of equivalent diameter " + fmt_num(diam[k]) + " m needs a space " + fmt_num(2 * r) +
+                            " m wide (its bounding sphere + 1 %), more than " + which +
+                            " m; give a larger container or smaller grains");
+    }
+    bool ok = false;
+    for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
+      Vec3 p{rng.uniform(r, box.lx - r), 0, 0};
+      if (dim == 3) {
+        p.y = rng.uniform(r, box.ly - r);
+        p.z = rng.uniform(r, top - r);
+      } else {
+        p.y = rng.uniform(r, top - r);
+      }
+      ok = free_at(p, r);
+      if (ok) pos[k] = p;
+    }
+    if (!ok)
+      pc.fail("fill_fraction", "could not place " + std::to_string(shapes.size()) +
+                                   " grains without overlap; lower fill_fraction or give a taller container.height");
+    bins[key(cell_of(pos[k].x), cell_of(pos[k].y), cell_of(pos[k].z))].push_back(k);
+  }
+  return pos;
+}
+
+// A generated cloud (Zhu & Zhao 2019 §5): sizes from the PSD (or one diameter, or the
+// templates' own), shapes from the templates, placed at fill_fraction, then settled.
+void cloud_packing(const Config& pc, const PackingSettings& ps, bool height_given, int dim, Rng& rng,
+                   PackingSpec& spec) {
+  const bool keep_size = ps.keep_template_size;
+  const double mono = ps.diameter;
+  std::vector<PsdPoint> psd;
+  if (!keep_size && mono > 0 && pc.has("psd")) pc.fail("psd", "give either psd or diameter, not both");
+  if (!keep_size && !(mono > 0)) psd = psd_from(pc);
+  const Templates tmpl = templates_from(pc, dim);
+  read_options(pc.child("settle"), settle_options(), spec.settle_settings);
+  spec.settle = spec.settle_settings.enabled;
+
+  std::vector<double> diam;
+  std::vector<std::size_t> pick;
+  for (long n = 0; n < ps.count; ++n)
+    pick.push_back(tmpl.shapes.size() == 1 ? 0
+                                           : static_cast<std::size_t>(rng.uniform() * tmpl.shapes.size()) % tmpl.shapes.size());
+  if (keep_size) {
+    for (std::size_t t : pick) diam.push_back(tmpl.shapes[t]->equivalent_diameter());
+  } else if (mono > 0) {
+    diam.assign(static_cast<std::size_t>(ps.count), mono);
+  } else {
+    diam = sample_psd(psd, static_cast<std::size_t>(ps.count), rng);
+  }
+  double vs = 0, rmax = 0;
+  std::vector<Shape::Ptr> shapes;
+  // Grains of the same template and size share one Shape (and so one level set / hull).
+  std::map<std::pair<std::size_t, double>, Shape::Ptr> cache;
+  for (std::size_t i = 0; i < diam.size(); ++i) {
+    auto& sh = cache[{pick[i], diam[i]}];
+    if (!sh) sh = tmpl.shapes[pick[i]]->scaled(diam[i] / tmpl.shapes[pick[i]]->equivalent_diameter());
+    shapes.push_back(sh);
+    vs += sh->volume();
+    rmax = std::max(rmax, sh->bounding_radius() * 1.01);
+  }
+  const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
+  // A cloud at fill_fraction; never lower than the largest grain (a few grains in a wide
+  // box would otherwise get a cloud thinner than one of them).
+  const double cloud_h = std::max(vs / (ps.fill_fraction * area), 2 * rmax * 1.001);
+  if (!height_given) spec.container.height = cloud_h;
+  const std::string size_key = keep_size ? "shape" : (mono > 0 ? "diameter" : "psd");
+  const std::vector<Vec3> pos =
+      place_cloud(pc, shapes, diam, spec.container, spec.container.height, rmax, dim, size_key, rng);
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    PlacedGrain g;
+    g.shape = shapes[i];
+    g.shape_spec = scaled_spec(tmpl.specs[pick[i]], diam[i] / tmpl.shapes[pick[i]]->equivalent_diameter());
+    g.position = pos[i];
+    g.orientation = random_orientation(rng, dim);
+    g.material = static_cast<int>(ps.material);
+    g.source = pc.path();
+    spec.grains.push_back(std::move(g));
+  }
+}
+
+Quat quaternion_from(const Config& e, const std::string& key) {
+  auto q = e.numbers(key, {1, 0, 0, 0});
+  if (q.size() != 4) e.fail(key, "expected a quaternion [w, x, y, z]");
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(n > 0)) e.fail(key, "quaternion must be non-zero");
+  return Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
+}
+
+// An explicit list ("grains") or the packing.json of an earlier run ("file").
+void explicit_packing(const Config& pc, const Config& cc, const PackingSettings& ps, bool height_given, int dim,
+                      PackingSpec& spec) {
+  std::vector<Config> entries;
+  std::unique_ptr<Json> file_doc;
+  std::unique_ptr<Config> file_cfg;
+  if (spec.type == "file") {
+    std::ifstream in(ps.path);
+    if (!in) pc.fail("path", "cannot open packing file '" + ps.path + "'");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    file_doc = std::make_unique<Json>(parse_json_text(ss.str(), ps.path));
+    file_cfg = std::make_unique<Config>(*file_doc);
+    entries = file_cfg->children("grains");
+    if (file_cfg->has("container")) {
+      Config fc = file_cfg->child("container");
+      if (!height_given) spec.container.height = fc.positive("height");
+      fc.number("lx", 0);
+      fc.number("ly", 0);
+      fc.number("platen_mass", 0);
+    }
+    file_cfg->integer("dimension", dim, dim, dim);
+    // Unknown keys are checked once the grain entries are read (below).
+  } else {
+    entries = pc.children("grains");
+    spec.settle = ps.settle;
+  }
+  if (entries.empty()) pc.fail(spec.type == "file" ? "path" : "grains", "the packing has no grains");
+  if (spec.container.height <= 0) cc.fail("height", "required for an explicit packing");
+  for (auto& e : entries) {
+    PlacedGrain g;
+    Config sc = e.required_child("shape");
+    g.shape = shape_from_config(sc, dim);
+    g.shape_spec = sc.doc();
+    const Vec3 p = e.vec3("position", {0, 0, 0});
+    if (!is_finite(p)) e.fail("position", "must be finite");
+    g.position = p;
+    g.orientation = quaternion_from(e, "orientation");
+    g.material = static_cast<int>(e.integer("material", 0, 0));
+    g.source = spec.type == "file" ? pc.path() + "/path (" + ps.path + ": " + e.path() + ")" : e.path();
+    spec.grains.push_back(std::move(g));
+  }
+  if (file_cfg) file_cfg->check_unknown();
+}
+
+}  // namespace
+
 PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng& rng) {
   PackingSpec spec;
-  spec.type = pc.choice("type", "cloud", {"cloud", "grains", "file"});
-  spec.container.lx = cc.positive("lx");
-  spec.container.ly = dim == 3 ? cc.positive("ly") : cc.number("ly", 0.0, 0.0, 0.0);
-  spec.container.platen_mass = cc.number("platen_mass", 0.0, 0.0);
+  PackingSettings ps;
+  ps.dimension = dim;
+  // The type first, then the container, then what the type reads.
+  read_options(pc, {find_option(packing_options(), "type")}, ps);
+  ContainerSettings cs;
+  cs.dimension = dim;
+  read_options(cc, container_options(), cs);
   const bool height_given = cc.has("height");
-  if (height_given) spec.container.height = cc.positive("height");
-
-  if (spec.type == "cloud") {
-    // At most 1e6 grains: far beyond what one machine runs (the full Zhu & Zhao 2019 run ends near
-    // 27 400), and 8e6 grains take minutes only to build their shapes.
-    const long count = pc.integer("count", 100, 1, 1000000);
-    // Sizes: a PSD by mass, or one "diameter" for all grains.
-    std::vector<PsdPoint> psd;
-    double mono = 0;
-    const bool keep_size = pc.boolean("keep_template_size", false);
-    if (keep_size) {
-      // Grains keep the sizes their templates give (e.g. YADE's discharge scene).
-    } else if (pc.has("diameter")) {
-      mono = pc.positive("diameter");
-      if (pc.has("psd")) pc.fail("psd", "give either psd or diameter, not both");
-    } else {
-      const auto& pj = pc.raw("psd");
-      if (!pj.is_array() || pj.size() < 2) pc.fail("psd", "expected at least two [diameter_m, fraction_passing] pairs");
-      for (std::size_t i = 0; i < pj.size(); ++i) {
-        const std::string where = "psd/" + std::to_string(i);
-        if (!pj[i].is_array() || pj[i].size() != 2 || !pj[i][0].is_number() || !pj[i][1].is_number())
-          pc.fail(where, "expected [diameter_m, fraction_passing]");
-        PsdPoint p{pj[i][0].get<double>(), pj[i][1].get<double>()};
-        if (!(p.diameter > 0) || !std::isfinite(p.diameter)) pc.fail(where + "/0", "diameter must be > 0");
-        if (!(p.passing >= 0 && p.passing <= 1)) pc.fail(where + "/1", "fraction passing must be in [0, 1]");
-        if (i > 0 && (p.diameter <= psd.back().diameter || p.passing < psd.back().passing))
-          pc.fail(where, "PSD must increase in diameter and not decrease in fraction passing");
-        psd.push_back(p);
-      }
-      if (psd.back().passing != 1.0) pc.fail("psd", "the last point must have fraction passing 1");
-    }
-    // One template, or several drawn uniformly per grain; each scaled to the drawn size.
-    std::vector<Shape::Ptr> tmpls;
-    std::vector<Json> tmpl_json;
-    // A template, or a pool of generated outlines ({"type": "pool"}: one template each).
-    auto add_template = [&](const Config& sc) {
-      // (A "type" that is not a string is left to shape_from_config's error.)
-      const Json& d = sc.doc();
-      if (dim == 2 && d.is_object() && d.contains("type") && d["type"].is_string() && d["type"] == "pool") {
-        for (Json spec : shape_pool(sc)) {
-          Config one(spec);
-          tmpls.push_back(shape_from_config(one, dim, /*unit_size=*/true));
-          tmpl_json.push_back(spec);
-        }
-        return;
-      }
-      tmpls.push_back(shape_from_config(sc, dim, /*unit_size=*/true));
-      tmpl_json.push_back(sc.doc());
-    };
-    if (pc.doc().contains("shape") && pc.doc()["shape"].is_array()) {
-      for (auto& sc : pc.children("shape")) add_template(sc);
-      if (tmpls.empty()) pc.fail("shape", "needs at least one shape template");
-    } else {
-      add_template(pc.child("shape"));
-    }
-    const double fill = pc.number("fill_fraction", dim == 3 ? 0.2 : 0.35, 0.01, 0.5);
-    const int material = static_cast<int>(pc.integer("material", 0, 0));
-    Config st = pc.child("settle");
-    spec.settle = st.boolean("enabled", true);
-    spec.settle_settings.stress = st.number("stress", 10e3, 0.0);
-    spec.settle_settings.max_time = st.positive("max_time", 0.5);
-    spec.settle_settings.dt = st.number("dt", 0.0, 0.0);
-    spec.settle_settings.tolerance = st.positive("tolerance", 1e-3);
-    spec.settle_settings.window = st.positive("window", 0.01);
-    spec.settle_settings.friction_scale = st.number("friction_scale", 1.0, 0.0, 1.0);
-
-    std::vector<double> diam;
-    std::vector<std::size_t> pick;
-    for (long n = 0; n < count; ++n)
-      pick.push_back(tmpls.size() == 1 ? 0 : static_cast<std::size_t>(rng.uniform() * tmpls.size()) % tmpls.size());
-    if (keep_size) {
-      for (std::size_t t : pick) diam.push_back(tmpls[t]->equivalent_diameter());
-    } else if (mono > 0) {
-      diam.assign(static_cast<std::size_t>(count), mono);
-    } else {
-      diam = sample_psd(psd, static_cast<std::size_t>(count), rng);
-    }
-    double vs = 0;
-    std::vector<Shape::Ptr> shapes;
-    std::vector<std::size_t> which;
-    // Grains of the same template and size share one Shape (and so one level set / hull).
-    std::map<std::pair<std::size_t, double>, Shape::Ptr> cache;
-    for (std::size_t i = 0; i < diam.size(); ++i) {
-      const std::size_t t = pick[i];
-      const double d = diam[i];
-      auto& sh = cache[{t, d}];
-      if (!sh) sh = tmpls[t]->scaled(d / tmpls[t]->equivalent_diameter());
-      shapes.push_back(sh);
-      which.push_back(t);
-      vs += sh->volume();
-    }
-    const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
-    double rmax = 0;
-    for (const auto& sh : shapes) rmax = std::max(rmax, sh->bounding_radius() * 1.01);
-    // A cloud at fill_fraction; never lower than the largest grain (a few grains in a wide
-    // box would otherwise get a cloud thinner than one of them).
-    const double cloud_h = std::max(vs / (fill * area), 2 * rmax * 1.001);
-    if (!height_given) spec.container.height = cloud_h;
-    // Random sequential addition without overlap of bounding spheres, largest first.
-    std::vector<std::size_t> order(shapes.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return diam[a] > diam[b]; });
-    std::vector<Vec3> pos(shapes.size());
-    std::vector<double> rad(shapes.size());
-    // Placed grains binned on a grid of cell 2·rmax (>= any r + rad[q]), so a trial point is
-    // checked against the grains of its own and the neighbouring cells only: the same
-    // accept/reject decisions as checking every grain, in O(N) instead of O(N²).
-    const double cell = 2 * rmax;
-    // Clamped before the conversion (a double beyond long's range does not convert).
-    auto cell_of = [&](double x) { return static_cast<long>(std::clamp(std::floor(x / cell), -4e18, 4e18)); };
-    std::unordered_map<unsigned long long, std::vector<std::size_t>> bins;
-    // 2^21 cells per axis, wrapping modulo 2^64 (unsigned: defined) for containers with more
-    // cells than that (a 1e9 m box of mm grains would overflow a signed key): two cells sharing a key only add distance checks, never change a decision.
-    auto key = [](long i, long j, long k) {
-      using U = unsigned long long;
-      return (static_cast<U>(i) * 2097152ULL + static_cast<U>(j)) * 2097152ULL + static_cast<U>(k);
-    };
-    const double top = spec.container.height;
-    for (std::size_t k : order) {
-      const double r = shapes[k]->bounding_radius() * 1.01;
-      rad[k] = r;
-      if (2 * r > spec.container.lx || (dim == 3 && 2 * r > spec.container.ly) || 2 * r > top) {
-        const std::string which = 2 * r > spec.container.lx                ? "container.lx = " + fmt_num(spec.container.lx)
-                                  : dim == 3 && 2 * r > spec.container.ly ? "container.ly = " + fmt_num(spec.container.ly)
-                                                                          : "container.height = " + fmt_num(top);
-        pc.fail(keep_size ? "shape" : (mono > 0 ? "diameter" : "psd"),
-                "a grain of equivalent diameter " + fmt_num(diam[k]) + " m needs a space " + fmt_num(2 * r) +
-                    " m wide (its bounding sphere + 1 %), more than " + which +
-                    " m; give a larger container or smaller grains");
-      }
-      bool ok = false;
-      for (int attempt = 0; attempt < 20000 && !ok; ++attempt) {
-        Vec3 p{rng.uniform(r, spec.container.lx - r), 0, 0};
-        if (dim == 3) {
-          p.y = rng.uniform(r, spec.container.ly - r);
-          p.z = rng.uniform(r, top - r);
-        } else {
-          p.y = rng.uniform(r, top - r);
-        }
-        ok = true;
-        const long ci = cell_of(p.x), cj = cell_of(p.y), ck = cell_of(p.z);
-        for (long di = -1; di <= 1 && ok; ++di)
-          for (long dj = -1; dj <= 1 && ok; ++dj)
-            for (long dk = -1; dk <= 1 && ok; ++dk) {
-              auto it = bins.find(key(ci + di, cj + dj, ck + dk));
-              if (it == bins.end()) continue;
-              for (std::size_t q : it->second)
-                if (norm2(p - pos[q]) < (r + rad[q]) * (r + rad[q])) {
-                  ok = false;
-                  break;
-                }
-            }
-        if (ok) pos[k] = p;
-      }
-      if (!ok)
-        pc.fail("fill_fraction", "could not place " + std::to_string(count) +
-                                     " grains without overlap; lower fill_fraction or give a taller container.height");
-      bins[key(cell_of(pos[k].x), cell_of(pos[k].y), cell_of(pos[k].z))].push_back(k);
-    }
-    for (std::size_t i = 0; i < shapes.size(); ++i) {
-      PlacedGrain g;
-      g.shape = shapes[i];
-      g.shape_spec = scaled_spec(tmpl_json[which[i]], diam[i] / tmpls[which[i]]->equivalent_diameter());
-      g.position = pos[i];
-      g.orientation = random_orientation(rng, dim);
-      g.material = material;
-      g.source = pc.path();
-      spec.grains.push_back(std::move(g));
-    }
-    return spec;
-  }
-
-  if (spec.type == "grains" || spec.type == "file") {
-    Json loaded;
-    std::vector<Config> entries;
-    std::unique_ptr<Json> file_doc;
-    std::unique_ptr<Config> file_cfg;
-    if (spec.type == "file") {
-      const std::string path = pc.string("path");
-      std::ifstream in(path);
-      if (!in) pc.fail("path", "cannot open packing file '" + path + "'");
-      std::stringstream ss;
-      ss << in.rdbuf();
-      file_doc = std::make_unique<Json>(parse_json_text(ss.str(), path));
-      file_cfg = std::make_unique<Config>(*file_doc);
-      entries = file_cfg->children("grains");
-      if (file_cfg->has("container")) {
-        Config fc = file_cfg->child("container");
-        if (!height_given) spec.container.height = fc.positive("height");
-        fc.number("lx", 0);
-        fc.number("ly", 0);
-        fc.number("platen_mass", 0);
-      }
-      file_cfg->integer("dimension", dim, dim, dim);
-      // Unknown keys are checked once the grain entries are read (below).
-    } else {
-      entries = pc.children("grains");
-      spec.settle = pc.boolean("settle", false);
-    }
-    if (entries.empty()) pc.fail(spec.type == "file" ? "path" : "grains", "the packing has no grains");
-    if (spec.container.height <= 0) cc.fail("height", "required for an explicit packing");
-    for (auto& e : entries) {
-      PlacedGrain g;
-      Config sc = e.required_child("shape");
-      g.shape = shape_from_config(sc, dim);
-      g.shape_spec = sc.doc();
-      const Vec3 p = e.vec3("position", {0, 0, 0});
-      if (!is_finite(p)) e.fail("position", "must be finite");
-      g.position = p;
-      auto q = e.numbers("orientation", {1, 0, 0, 0});
-      if (q.size() != 4) e.fail("orientation", "expected a quaternion [w, x, y, z]");
-      const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-      if (!(n > 0)) e.fail("orientation", "quaternion must be non-zero");
-      g.orientation = Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
-      g.material = static_cast<int>(e.integer("material", 0, 0));
-      g.source = spec.type == "file" ? pc.path() + "/path (" + pc.doc()["path"].get<std::string>() + ": " + e.path() + ")"
-                                     : e.path();
-      spec.grains.push_back(std::move(g));
-    }
-    if (spec.type == "file" && file_cfg) file_cfg->check_unknown();
-    return spec;
-  }
+  spec.type = ps.type;
+  spec.container = cs.box;
+  read_options(pc, packing_options(), ps);
+  if (spec.type == "cloud") cloud_packing(pc, ps, height_given, dim, rng, spec);
+  else explicit_packing(pc, cc, ps, height_given, dim, spec);
   return spec;
 }
 

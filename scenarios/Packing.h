@@ -35,6 +35,7 @@ struct PlacedGrain {
 // Settling is measured in simulated time so that engines with very different time steps
 // (Bullet's 8e-5 s, an explicit DEM's 1e-6 s) settle the same physical way.
 struct SettleSettings {
+  bool enabled = true;        // a generated cloud settles before loading
   double stress = 10e3;       // Pa pushed by the platen while settling
   double max_time = 0.5;      // s of simulated time at most
   double dt = 0;              // s; 0 = the scenario's first time step (capped by the engine's bound)

@@ -18,7 +18,7 @@
 #include "breakage/peridynamics/Peridynamics.h"
 #include "breakage/stress/StressModel.h"
 #include "geometry/level_set/LevelSetBuilder.h"
-#include "output/VtkWriter.h"
+#include "scenarios/Sections.h"
 
 namespace crumble {
 
@@ -122,10 +122,7 @@ std::vector<NamedOptions> registered_options() {
   collect("engine", engines(), out);
   collect("breakage model", breakage_models(), out);
   collect("fragment builder", fragment_builders(), out);
-  // Output options declared in a table (the rest of "output" is read by the scenario factory).
-  out.push_back({"output", "output", "ParaView output of a run (docs/output.md)", &vtk_output_options()});
-  out.push_back({"screening", "screening", "which grains are analysed; the skip rule for grains analysed whole",
-                 &screening_options()});
+  for (const auto& s : scenario_sections()) out.push_back({"scenario section", s.name, s.description, s.options});
   return out;
 }
 

@@ -55,7 +55,7 @@ Table<BuilderFactory>& fragment_builders();
 
 // The registered implementations (of any seam) called `name`, each as "seam: table".
 struct NamedOptions {
-  std::string seam;  // "engine", "breakage model", "fragment builder"
+  std::string seam;  // "engine", "breakage model", "fragment builder", "scenario section"
   std::string name;
   std::string description;
   const OptionTable* options;

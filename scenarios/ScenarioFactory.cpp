@@ -41,14 +41,7 @@ std::vector<Material> materials_from(const Config& root) {
     list = root.children("materials");
   }
   for (auto& m : list) {
-    Material mat;
-    mat.density = m.positive("density", mat.density);
-    mat.young = m.positive("young", mat.young);
-    mat.poisson = m.number("poisson", mat.poisson, -0.99, 0.5);
-    mat.friction = m.number("friction", mat.friction, 0.0);
-    mat.wall_friction = m.number("wall_friction", mat.wall_friction, 0.0);
-    mat.rolling_friction = m.number("rolling_friction", mat.rolling_friction, 0.0);
-    mat.restitution = m.number("restitution", mat.restitution, 0.0, 1.0);
+    const auto mat = read_options<Material>(m, material_options());
     // No built-in engine models restitution (Bullet and ODE contacts are perfectly plastic,
     // lsdem's energy loss is its contact damping): a value other than 0 would be ignored.
     if (mat.restitution != 0.0)
@@ -65,14 +58,14 @@ std::vector<TimeStepRule> time_steps_from(const Config& root) {
   const Json& d = root.doc();
   if (d.contains("time_step") && d["time_step"].is_array()) {
     for (auto& r : root.children("time_step")) {
-      TimeStepRule t{r.number("below_stress", 1e300), r.positive("dt")};
+      TimeStepRule t{r.number("below_stress", SimulationSettings{}.time_steps.back().below_stress), r.positive("dt")};
       if (!rules.empty() && t.below_stress <= rules.back().below_stress)
         r.fail("below_stress", "time-step rules must have increasing below_stress");
       rules.push_back(t);
     }
     if (rules.empty()) root.fail("time_step", "needs at least one {below_stress, dt} rule");
   } else {
-    rules.push_back({1e300, root.positive("time_step", 5e-5)});
+    rules.push_back({SimulationSettings{}.time_steps.back().below_stress, Options(root, scenario_options()).number("time_step")});
   }
   return rules;
 }
@@ -137,6 +130,155 @@ void check_time_step_bound(const Config& root, const Config& ec, const RegistryE
   }
 }
 
+// The packing (or scene) and the moving walls; their errors do not depend on the engine.
+void read_packing(const Config& root, int dim, Scenario& sc, const EngineContext& ctx) {
+  Rng packing_rng = Rng(sc.seed).derive(0xC10D);
+  if (root.has("scene")) {
+    if (root.has("packing") || root.has("container"))
+      root.fail("scene", "a scene builds its own container and packing: remove 'packing' and 'container'");
+    sc.packing = scene_from_config(root.child("scene"), dim, packing_rng);
+  } else {
+    sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
+  }
+  // Moving walls given by shapes and a prescribed motion (core/MovingWall.h).
+  auto wcs = root.children("walls");
+  for (std::size_t i = 0; i < wcs.size(); ++i)
+    sc.packing.walls.push_back(wall_from_config(wcs[i], dim, "wall_" + std::to_string(i)));
+  check_packing_materials(sc.packing, ctx.materials.size());
+  check_explicit_grains(sc.packing, dim);
+}
+
+template <class Entry>
+void check_dimension(const Entry& entry, const Config& c, int dim) {
+  for (int d : entry.dimensions)
+    if (d == dim) return;
+  c.fail("type", "'" + entry.name + "' does not support " + std::to_string(dim) + "D scenarios");
+}
+
+struct Implementations {
+  std::unique_ptr<Engine> engine;
+  std::unique_ptr<BreakageModel> model;
+  std::unique_ptr<FragmentBuilder> builder;
+  const RegistryEntry<EngineFactory>* engine_entry = nullptr;
+};
+
+// An engine that cannot do what the packing asks (frictionless settling, moving walls) refuses
+// now, naming itself, not after settling.
+void check_engine_can(Engine& engine, const RegistryEntry<EngineFactory>& entry, const Config& root, const Config& ec,
+                      const EngineContext& ctx, const PackingSpec& packing) {
+  if (packing.settle && packing.settle_settings.friction_scale != 1.0) {
+    if (!engine.set_friction_scale(packing.settle_settings.friction_scale))
+      throw ConfigError("/packing/settle/friction_scale",
+                        "the engine '" + entry.name + "' cannot change friction while settling; use 1");
+    engine.set_friction_scale(1.0);
+  }
+  if (packing.walls.empty()) return;
+  nlohmann::json copy = ec.doc();
+  Config probe_cfg(copy);
+  try {
+    entry.make(probe_cfg, ctx)->add_moving_wall(packing.walls.front());
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError("/engine/type", std::string(e.what()) + " (moving walls come from " +
+                                          (root.has("walls") ? "/walls" : "/scene") + ")");
+  }
+}
+
+// The engine, breakage model and fragment builder the scenario names (the dimension's
+// defaults when it names none), each checked for the dimension.
+Implementations make_implementations(const Config& root, int dim, Scenario& sc, const EngineContext& ctx) {
+  const DefaultImplementations& def = default_implementations(dim);
+  Implementations im;
+  Config ec = root.child("engine");
+  sc.engine_name = ec.string("type", def.engine);
+  im.engine_entry = &engines().find(sc.engine_name, "/engine/type");
+  check_dimension(*im.engine_entry, ec, dim);
+  Config bc = root.child("breakage");
+  sc.breakage_name = bc.string("type", def.breakage);
+  const auto& bentry = breakage_models().find(sc.breakage_name, "/breakage/type");
+  check_dimension(bentry, bc, dim);
+  sc.fragments_name = "none";
+  if (sc.breakage_name != "none" || root.doc().contains("fragments")) {
+    Config fc = root.child("fragments");
+    sc.fragments_name = fc.string("type", def.fragments);
+    const auto& fentry = fragment_builders().find(sc.fragments_name, "/fragments/type");
+    check_dimension(fentry, fc, dim);
+    im.builder = fentry.make(fc, ctx);
+  }
+  im.engine = im.engine_entry->make(ec, ctx);
+  check_engine_can(*im.engine, *im.engine_entry, root, ec, ctx, sc.packing);
+  im.model = bentry.make(bc, ctx);
+  accept_sibling_options(ec, engines(), sc.engine_name, sc.notes);
+  accept_sibling_options(bc, breakage_models(), sc.breakage_name, sc.notes);
+  if (im.builder) accept_sibling_options(root.child("fragments"), fragment_builders(), sc.fragments_name, sc.notes);
+  return im;
+}
+
+SimulationSettings simulation_from(const Config& root, int threads) {
+  SimulationSettings ss;
+  ss.time_steps = time_steps_from(root);
+  Config simc = root.child("simulation");
+  read_options(simc, simulation_options(), ss);
+  read_options(simc.child("guards"), guard_options(), ss.guards);
+  ss.threads = threads;
+  return ss;
+}
+
+LoadingSettings loading_from(const Config& root, const PackingSpec& packing, const SimulationSettings& ss) {
+  LoadingSettings ls;
+  Config lc = root.child("loading");
+  if (packing.duration > 0) {
+    // The scene fixes the run's length (jaw crusher: scene.cycles revolutions): mode none, that duration.
+    lc.choice("mode", "none", {"none"});
+    const double duration = lc.number("duration", packing.duration, 0.0);
+    if (std::abs(duration - packing.duration) > 1e-9 * packing.duration)
+      lc.fail("duration", "the scene runs for " + fmt_num(packing.duration) +
+                              " s (scene.cycles revolutions); change scene.cycles instead, or leave loading out");
+  }
+  read_options(lc, loading_options(), ls);
+  if (ls.mode == "none" && ls.duration == 0 && ss.max_steps == 0)
+    lc.fail("mode", "loading mode 'none' needs loading.duration or simulation.max_steps");
+  if (ls.mode == "strain_rate" && ls.stop_stress == 0 && ls.stop_force == 0 && ls.stop_strain == 0 &&
+      ss.max_steps == 0 && ss.stop_after_breakage_events == 0)
+    lc.fail("mode", "strain_rate loading needs a stop: stop_stress, stop_force, stop_strain, "
+                    "simulation.max_steps or simulation.stop_after_breakage_events");
+  return ls;
+}
+
+OutputSettings output_from(const Config& root, const PackingSpec& packing) {
+  Config oc = root.child("output");
+  // Scenes with moving walls or a feed cannot be checkpointed: their default is 0, and a value is refused.
+  const bool open_scene = !packing.walls.empty() || packing.feed.count > 0;
+  if (open_scene && !oc.has("checkpoint_every_s")) oc.number("checkpoint_every_s", 0.0);
+  OutputSettings out;
+  read_options(oc, output_options(), out);
+  for (std::size_t i = 0; i < out.psd_at_strain.size(); ++i)
+    if (!(out.psd_at_strain[i] > 0 && out.psd_at_strain[i] < 1))
+      oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
+  const std::string refused = "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
+                              "for scenarios with walls or a jaw_crusher scene";
+  if (open_scene && out.checkpoint_every > 0) oc.fail("checkpoint_every", refused);
+  if (open_scene && out.checkpoint_every_s > 0) oc.fail("checkpoint_every_s", refused);
+  return out;
+}
+
+// The top level: name, dimension, seed (the command line's first), threads, gravity, materials.
+EngineContext context_from(const Config& root, Json& doc, const BuildOptions& opt, Scenario& sc) {
+  if (opt.seed) doc["seed"] = *opt.seed;
+  if (opt.threads) doc["threads"] = *opt.threads;
+  ScenarioSettings top;
+  read_options(root, scenario_options(), top);
+  sc.name = top.name;
+  sc.seed = top.seed;
+  sc.threads = static_cast<int>(top.threads);
+  EngineContext ctx;
+  ctx.dimension = static_cast<int>(top.dimension);
+  ctx.gravity = top.gravity;
+  ctx.materials = materials_from(root);
+  ctx.threads = sc.threads;
+  ctx.seed = sc.seed;
+  return ctx;
+}
+
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
@@ -148,194 +290,26 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   for (const auto& w : apply_fidelity(doc)) sc.notes.push_back("fidelity '" + doc["fidelity"].get<std::string>() + "' sets " + w);
   Config root(doc);
   if (root.has("fidelity")) root.accept("fidelity");
-  sc.name = root.string("name", "scenario");
-  root.string("description", "");
-  const int dim = static_cast<int>(root.integer("dimension", 3, 2, 3));
-  if (opt.seed) doc["seed"] = *opt.seed;
-  if (opt.threads) doc["threads"] = *opt.threads;
-  sc.seed = root.unsigned_integer("seed", 1);
-  sc.threads = static_cast<int>(root.integer("threads", 1, 1, 1024));
+  const EngineContext ctx = context_from(root, doc, opt, sc);
+  const int dim = ctx.dimension;
+  read_packing(root, dim, sc, ctx);
+  Implementations im = make_implementations(root, dim, sc, ctx);
 
-  EngineContext ctx;
-  ctx.dimension = dim;
-  ctx.gravity = root.vec3("gravity", dim == 3 ? Vec3{0, 0, -9.81} : Vec3{0, -9.81, 0});
-  ctx.materials = materials_from(root);
-  ctx.threads = sc.threads;
-  ctx.seed = sc.seed;
-
-  // The packing first: its errors do not depend on which engine is chosen.
-  Rng packing_rng = Rng(sc.seed).derive(0xC10D);
-  if (root.has("scene")) {
-    if (root.has("packing") || root.has("container"))
-      root.fail("scene", "a scene builds its own container and packing: remove 'packing' and 'container'");
-    sc.packing = scene_from_config(root.child("scene"), dim, packing_rng);
-  } else {
-    sc.packing = packing_from_config(root.child("packing"), root.child("container"), dim, packing_rng);
-  }
-  {
-    // Moving walls given by shapes and a prescribed motion (core/MovingWall.h).
-    auto wcs = root.children("walls");
-    for (std::size_t i = 0; i < wcs.size(); ++i)
-      sc.packing.walls.push_back(wall_from_config(wcs[i], dim, "wall_" + std::to_string(i)));
-  }
-  check_packing_materials(sc.packing, ctx.materials.size());
-  check_explicit_grains(sc.packing, dim);
-
-  auto check_dim = [&](const auto& entry, const Config& c) {
-    for (int d : entry.dimensions)
-      if (d == dim) return;
-    c.fail("type", "'" + entry.name + "' does not support " + std::to_string(dim) + "D scenarios");
-  };
-
-  Config ec = root.child("engine");
-  const std::string et = ec.string("type", "bullet");
-  const auto& eentry = engines().find(et, "/engine/type");
-  check_dim(eentry, ec);
-  Config bc = root.child("breakage");
-  const std::string bt = bc.string("type", "none");
-  const auto& bentry = breakage_models().find(bt, "/breakage/type");
-  check_dim(bentry, bc);
-  std::unique_ptr<FragmentBuilder> builder;
-  std::string ft = "none";
-  if (bt != "none" || root.doc().contains("fragments")) {
-    Config fc = root.child("fragments");
-    ft = fc.string("type", dim == 3 ? "alpha_shape" : "level_set");
-    const auto& fentry = fragment_builders().find(ft, "/fragments/type");
-    check_dim(fentry, fc);
-    builder = fentry.make(fc, ctx);
-  }
-  auto engine = eentry.make(ec, ctx);
-  // Frictionless settling needs an engine that can change friction (validate says so too).
-  if (sc.packing.settle && sc.packing.settle_settings.friction_scale != 1.0) {
-    if (!engine->set_friction_scale(sc.packing.settle_settings.friction_scale))
-      throw ConfigError("/packing/settle/friction_scale",
-                        "the engine '" + et + "' cannot change friction while settling; use 1");
-    engine->set_friction_scale(1.0);
-  }
-  if (!sc.packing.walls.empty()) {
-    // An engine without moving walls refuses them now, naming itself, not after settling.
-    nlohmann::json copy = ec.doc();
-    Config probe_cfg(copy);
-    try {
-      eentry.make(probe_cfg, ctx)->add_moving_wall(sc.packing.walls.front());
-    } catch (const std::invalid_argument& e) {
-      throw ConfigError("/engine/type", std::string(e.what()) + " (moving walls come from " +
-                                            (root.has("walls") ? "/walls" : "/scene") + ")");
-    }
-  }
-  auto model = bentry.make(bc, ctx);
-  accept_sibling_options(ec, engines(), et, sc.notes);
-  accept_sibling_options(bc, breakage_models(), bt, sc.notes);
-  if (builder) accept_sibling_options(root.child("fragments"), fragment_builders(), ft, sc.notes);
-  sc.engine_name = et;
-  sc.breakage_name = bt;
-  sc.fragments_name = ft;
-
-  SimulationSettings ss;
-  ss.time_steps = time_steps_from(root);
-  Config simc = root.child("simulation");
-  ss.max_steps = simc.integer("max_steps", 0, 0);
-  ss.sample_every = simc.integer("sample_every", 100, 1);
-  ss.fines_diameter = simc.number("fines_diameter", 0.0, 0.0);
-  ss.auto_reduce_dt = simc.boolean("auto_reduce_dt", true);
-  ss.stop_after_breakage_events = simc.integer("stop_after_breakage_events", 0, 0);
-  {
-    Config gc = simc.child("guards");
-    GuardSettings& g = ss.guards;
-    g.enabled = gc.boolean("enabled", g.enabled);
-    g.max_overlap_fraction = gc.number("max_overlap_fraction", g.max_overlap_fraction, 0.0, 1.0);
-    g.energy_factor = gc.number("energy_factor", g.energy_factor, 0.0);
-    g.small_grain_fraction = gc.number("small_grain_fraction", g.small_grain_fraction, 0.0, 1.0);
-    g.containment = gc.boolean("containment", g.containment);
-  }
-  ss.threads = sc.threads;
-  if (!ss.auto_reduce_dt) check_time_step_bound(root, ec, eentry, ctx, sc.packing, ss.time_steps);
-
-  LoadingSettings ls;
-  Config lc = root.child("loading");
-  if (sc.packing.duration > 0) {
-    // The scene fixes the run's length (jaw crusher: scene.cycles revolutions).
-    ls.mode = lc.choice("mode", "none", {"none"});
-    ls.duration = lc.number("duration", sc.packing.duration, 0.0);
-    if (std::abs(ls.duration - sc.packing.duration) > 1e-9 * sc.packing.duration)
-      lc.fail("duration", "the scene runs for " + fmt_num(sc.packing.duration) +
-                              " s (scene.cycles revolutions); change scene.cycles instead, or leave loading out");
-  } else {
-    ls.mode = lc.choice("mode", "stress_ramp", {"stress_ramp", "strain_rate", "none"});
-  }
-  if (ls.mode == "none") {
-    ls.duration = lc.number("duration", 0.0, 0.0);
-  } else if (ls.mode == "stress_ramp") {
-    ls.max_stress = lc.positive("max_stress", 1e6);
-    ls.ramp_time = lc.positive("ramp_time", 0.1);
-    ls.hold_time = lc.number("hold_time", 0.0, 0.0);
-    ls.initial_stress = lc.number("initial_stress", 0.0, 0.0);
-  } else {
-    ls.strain_rate = lc.positive("strain_rate", 0.1);
-  }
-  ls.stop_stress = lc.number("stop_stress", 0.0, 0.0);
-  ls.stop_force = lc.number("stop_force", 0.0, 0.0);
-  ls.stop_strain = lc.number("stop_strain", 0.0, 0.0, 1.0);
-  if (ls.mode == "none" && ls.duration == 0 && ss.max_steps == 0)
-    lc.fail("mode", "loading mode 'none' needs loading.duration or simulation.max_steps");
-  if (ls.mode == "strain_rate" && ls.stop_stress == 0 && ls.stop_force == 0 && ls.stop_strain == 0 &&
-      ss.max_steps == 0 && ss.stop_after_breakage_events == 0)
-    lc.fail("mode", "strain_rate loading needs a stop: stop_stress, stop_force, stop_strain, "
-                    "simulation.max_steps or simulation.stop_after_breakage_events");
-
+  SimulationSettings ss = simulation_from(root, sc.threads);
+  if (!ss.auto_reduce_dt)
+    check_time_step_bound(root, root.child("engine"), *im.engine_entry, ctx, sc.packing, ss.time_steps);
+  const LoadingSettings ls = loading_from(root, sc.packing, ss);
   // The breakage model's method fixes the defaults; the scenario may override each value.
-  ScheduleSettings sch = model->default_schedule();
-  Config schc = root.child("schedule");
-  sch.every_stress = schc.number("every_stress", sch.every_stress, 0.0);
-  sch.every_steps = schc.integer("every_steps", sch.every_steps, 0);
-
-  ScreeningSettings scr = model->default_screening();
-  Config scrc = root.child("screening");
-  scr.min_diameter = scrc.number("min_diameter", scr.min_diameter, 0.0);
-  scr.force_threshold = scrc.boolean("force_threshold", scr.force_threshold);
-  scr.max_unbalanced_force_ratio = scrc.number("max_unbalanced_force_ratio", scr.max_unbalanced_force_ratio);
-  scr.max_unbalanced_moment_ratio = scrc.number("max_unbalanced_moment_ratio", scr.max_unbalanced_moment_ratio);
-  scr.min_contacts = static_cast<int>(scrc.integer("min_contacts", scr.min_contacts, 1));
-  scr.moment_couples = scrc.boolean("moment_couples", scr.moment_couples);
-  scr.skip_intact_tolerance = Options(scrc, screening_options()).number("skip_intact_tolerance", scr.skip_intact_tolerance);
-
-  Config oc = root.child("output");
-  sc.output.series_every = oc.integer("series_every", 0, 0);
-  sc.output.psd_at_stress = oc.numbers("psd_at_stress", {});
-  sc.output.psd_at_strain = oc.numbers("psd_at_strain", {});
-  for (std::size_t i = 0; i < sc.output.psd_at_strain.size(); ++i)
-    if (!(sc.output.psd_at_strain[i] > 0 && sc.output.psd_at_strain[i] < 1))
-      oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
-  sc.output.shape_metrics = oc.boolean("shape_metrics", true);
-  sc.output.intact_analyses = oc.boolean("intact_analyses", true);
-  {
-    const Options vo(oc, vtk_output_options());
-    sc.output.vtk_every = vo.integer("vtk_every");
-    sc.output.vtk_final = vo.boolean("vtk_final");
-    sc.output.vtk_contacts = vo.boolean("vtk_contacts");
-    sc.output.vtk_analyses = vo.boolean("vtk_analyses");
-  }
-  sc.output.checkpoint_every = oc.integer("checkpoint_every", 0, 0);
-  sc.output.plots = oc.boolean("plots", true);
-  sc.output.psd_layers = oc.integer("psd_layers", 0, 0, 100);  // Liu et al. 2019 §4.3.3: sieve curves per layer
+  ScheduleSettings sch = im.model->default_schedule();
+  read_options(root.child("schedule"), schedule_options(), sch);
+  ScreeningSettings scr = im.model->default_screening();
+  read_options(root.child("screening"), screening_options(), scr);
+  sc.output = output_from(root, sc.packing);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
-  if (sc.output.checkpoint_every > 0 && (!sc.packing.walls.empty() || sc.packing.feed.count > 0))
-    oc.fail("checkpoint_every", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
-                                "for scenarios with walls or a jaw_crusher scene");
-  {
-    // Checkpoints by wall time, on by default (a run killed after hours loses minutes);
-    // scenes that cannot be checkpointed default to off and refuse a value.
-    const bool open_scene = !sc.packing.walls.empty() || sc.packing.feed.count > 0;
-    sc.output.checkpoint_every_s = oc.number("checkpoint_every_s", open_scene ? 0.0 : kDefaultCheckpointSeconds, 0.0);
-    if (open_scene && sc.output.checkpoint_every_s > 0)
-      oc.fail("checkpoint_every_s", "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
-                                    "for scenarios with walls or a jaw_crusher scene");
-  }
-
 
   root.check_unknown();
-  sc.sim = std::make_unique<Simulation>(std::move(engine), std::move(model), std::move(builder), ctx, ss, ls, sch,
-                                        scr, sc.seed);
+  sc.sim = std::make_unique<Simulation>(std::move(im.engine), std::move(im.model), std::move(im.builder), ctx, ss, ls,
+                                        sch, scr, sc.seed);
   sc.effective = doc;
   return sc;
 }

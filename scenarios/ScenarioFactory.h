@@ -8,27 +8,9 @@
 
 #include "core/Simulation.h"
 #include "scenarios/Packing.h"
+#include "scenarios/Sections.h"
 
 namespace crumble {
-
-// output.checkpoint_every_s when the scenario does not say (s of wall time).
-inline constexpr double kDefaultCheckpointSeconds = 300;
-
-struct OutputSettings {
-  long series_every = 0;                 // steps between series rows (0 = simulation.sample_every)
-  std::vector<double> psd_at_stress;     // Pa: PSD tables written when the stress first passes these
-  std::vector<double> psd_at_strain;     // axial strains: PSD tables written when the strain first passes these
-  bool shape_metrics = true;             // shape.csv (means of the grains' shape descriptors per sample)
-  bool intact_analyses = true;           // events.csv rows for analyses that left their grain whole
-  long vtk_every = 0;                    // steps between VTK snapshots (0 = none)
-  bool vtk_final = true;                 // write the final state as VTK
-  bool vtk_contacts = false;             // contact-force lines in each VTK snapshot
-  bool vtk_analyses = false;             // per-point data of breakage analyses (vtk/analysis_*.vtp)
-  long checkpoint_every = 0;             // steps between checkpoint.json writes (0 = none)
-  bool plots = true;                     // PNG figures at the end of `crumble run` (output/Plots.h)
-  double checkpoint_every_s = 0;         // wall-time seconds between checkpoint.json writes (0 = none)
-  long psd_layers = 0;                   // psd_layers.csv: sieve curves per layer of the initial packing (0 = none)
-};
 
 struct Scenario {
   std::string name;

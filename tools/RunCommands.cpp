@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "output/Plots.h"
+#include "scenarios/Sections.h"
 #include "tools/Subcommand.h"
 
 namespace crumble {
@@ -24,9 +25,11 @@ class RunCommand : public Subcommand {
     c->add_flag("--quiet", quiet_,
                 "no progress on stderr (otherwise a line with an ETA every 2 s on a terminal, every 60 s in a log)");
     c->add_flag("--resume", resume_,
-                "continue from DIR/checkpoint.json (written every output.checkpoint_every_s seconds, default 300, "
-                "and every output.checkpoint_every steps), also after SIGKILL; the effective scenario must equal "
-                "DIR/effective_scenario.json but for threads, simulation.max_steps and output.checkpoint_every_s");
+                "continue from DIR/checkpoint.json (written every output.checkpoint_every_s, default " +
+                    option_default_text(find_option(output_options(), "checkpoint_every_s")) +
+                    ", and every output.checkpoint_every steps), also after SIGKILL; the effective scenario must "
+                    "equal DIR/effective_scenario.json but for threads, simulation.max_steps and "
+                    "output.checkpoint_every_s");
     c->add_flag("--force", force_,
                 "use a non-empty --out folder: first remove the earlier run's files there (only crumble's own)");
     c->footer(kExitStatus);

@@ -131,18 +131,10 @@ struct Law {
 
 LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)), ctx_(std::move(ctx)) {
   if (ctx_.dimension != 2 && ctx_.dimension != 3) throw std::invalid_argument("lsdem: dimension must be 2 or 3");
-  if (s_.contact_law != "linear" && s_.contact_law != "hertz")
-    throw std::invalid_argument("lsdem: contact_law must be \"linear\" or \"hertz\" (got \"" + s_.contact_law + "\")");
+  // Every option in its declared range (lsdem_options), then what spans several.
+  check_options(lsdem_options(), s_, "lsdem");
   if (s_.contact_law == "hertz" && ctx_.dimension == 2)
     throw std::invalid_argument("lsdem: the hertz contact law is 3D only (2D contacts of cylinders are not Hertzian)");
-  if (!(s_.kn > 0) || !std::isfinite(s_.kn)) throw std::invalid_argument("lsdem: kn must be > 0");
-  if (!(s_.wall_kn >= 0) || !std::isfinite(s_.wall_kn)) throw std::invalid_argument("lsdem: wall_kn must be >= 0");
-  if (!(s_.ks_ratio >= 0)) throw std::invalid_argument("lsdem: ks_ratio must be >= 0");
-  if (!(s_.damping_ratio >= 0)) throw std::invalid_argument("lsdem: damping_ratio must be >= 0");
-  if (!(s_.global_damping >= 0)) throw std::invalid_argument("lsdem: global_damping must be >= 0");
-  if (!(s_.dt_safety > 0)) throw std::invalid_argument("lsdem: dt_safety must be > 0");
-  if (!(s_.pair_list_skin >= 0) || !std::isfinite(s_.pair_list_skin))
-    throw std::invalid_argument("lsdem: pair_list_skin must be >= 0");
   if (ctx_.materials.empty()) throw std::invalid_argument("lsdem: no material");
   for (const auto& m : ctx_.materials)
     if (!(m.density > 0) || !(m.friction >= 0) || !(m.wall_friction >= 0) ||
@@ -1046,22 +1038,22 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
 // ---- Factory and benchmark ----
 
 const OptionTable& lsdem_options() {
+  using S = LsdemSettings;
   static const OptionTable t = [] {
     const double inf = std::numeric_limits<double>::infinity();
-    const LsdemSettings d;
     return OptionTable{
-        opt::choice("contact_law", d.contact_law, {"linear", "hertz"},
+        opt::choice("contact_law", &S::contact_law, {"linear", "hertz"},
                     "normal force k_n·δ (\"linear\") or Hertzian (4/3)·E*·√R*·δ^(3/2) (\"hertz\", 3D only)"),
-        opt::positive("kn", d.kn, "N/m", "grain–grain normal stiffness (Harmon et al. 2020 Table 2); 2D: per metre of thickness"),
-        opt::number("ks_ratio", d.ks_ratio, 0, 10, "", "k_s / k_n (Harmon et al. 2020 Table 2)"),
-        opt::number("wall_kn", d.wall_kn, 0, inf, "N/m", "grain–wall normal stiffness; 0 = kn"),
-        opt::number("damping_ratio", d.damping_ratio, 0, 10, "", "contact critical-damping ratio ζ (Harmon et al. 2020 Table 2)"),
-        opt::number("global_damping", d.global_damping, 0, inf, "1/s", "global damping C_g (Harmon et al. 2020 Tables 1–2)"),
-        opt::number("dt_safety", d.dt_safety, 1e-6, 2, "", "stable step = dt_safety·√(m_min/k)"),
-        opt::number("hertz_reference_overlap", d.hertz_reference_overlap, 1e-9, 0.5, "",
+        opt::positive("kn", &S::kn, "N/m", "grain–grain normal stiffness (Harmon et al. 2020 Table 2); 2D: per metre of thickness"),
+        opt::number("ks_ratio", &S::ks_ratio, 0, 10, "", "k_s / k_n (Harmon et al. 2020 Table 2)"),
+        opt::number("wall_kn", &S::wall_kn, 0, inf, "N/m", "grain–wall normal stiffness; 0 = kn"),
+        opt::number("damping_ratio", &S::damping_ratio, 0, 10, "", "contact critical-damping ratio ζ (Harmon et al. 2020 Table 2)"),
+        opt::number("global_damping", &S::global_damping, 0, inf, "1/s", "global damping C_g (Harmon et al. 2020 Tables 1–2)"),
+        opt::number("dt_safety", &S::dt_safety, 1e-6, 2, "", "stable step = dt_safety·√(m_min/k)"),
+        opt::number("hertz_reference_overlap", &S::hertz_reference_overlap, 1e-9, 0.5, "",
                     "overlap / smallest equivalent radius at which the Hertz stiffness sets the stable step"),
-        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
-        opt::number("pair_list_skin", d.pair_list_skin, 0, 10, "",
+        opt::positive("mass_scale", &S::mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
+        opt::number("pair_list_skin", &S::pair_list_skin, 0, 10, "",
                     "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
                     "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "
                     "results, bit for bit: only the speed changes)"),
@@ -1072,21 +1064,11 @@ const OptionTable& lsdem_options() {
 
 std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "lsdem");
-  const Options o(cfg, lsdem_options());
   LsdemSettings s;
-  s.contact_law = o.string("contact_law");
-  s.kn = o.number("kn");
-  s.ks_ratio = o.number("ks_ratio");
-  s.wall_kn = o.number("wall_kn");
-  s.damping_ratio = o.number("damping_ratio");
-  s.global_damping = o.number("global_damping");
-  s.dt_safety = o.number("dt_safety");
-  s.hertz_reference_overlap = o.number("hertz_reference_overlap");
-  s.mass_scale = o.number("mass_scale");
-  s.pair_list_skin = o.number("pair_list_skin");
+  read_options(cfg, lsdem_options(), s);
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
-    o.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
+    cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
   return std::make_unique<LsdemEngine>(s, ctx);
 }
 

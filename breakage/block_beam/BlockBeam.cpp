@@ -24,39 +24,39 @@ void require(bool ok, const std::string& what) {
 // ---------------------------------------------------------------- options
 
 const OptionTable& block_beam_options() {
+  using S = BbOptions;
   static const OptionTable t = [] {
-    const BbOptions d;
     const double inf = std::numeric_limits<double>::infinity();
     return OptionTable{
         // Mesh (Liu et al. 2019 §2.1).
-        opt::number("blocks_per_diameter", d.blocks_per_diameter, 1, 100, "",
+        opt::number("blocks_per_diameter", &S::blocks_per_diameter, 1, 100, "",
                     "d_e / target edge of the tetrahedral blocks (CGAL Mesh_3; Liu et al. 2019 §2.1)"),
-        opt::number("facet_distance", d.facet_distance, 0, 1, "",
+        opt::number("facet_distance", &S::facet_distance, 0, 1, "",
                     "largest distance of the meshed surface from the grain's, / target edge (0: edge / 10)"),
-        opt::integer("min_blocks", d.min_blocks, 2, 100'000'000, "fewer blocks: outcome too_few_blocks"),
+        opt::integer("min_blocks", &S::min_blocks, 2, 100'000'000, "fewer blocks: outcome too_few_blocks"),
         // Beams and strength (§2.3).
-        opt::positive("tensile_strength", d.tensile_strength, "Pa",
+        opt::positive("tensile_strength", &S::tensile_strength, "Pa",
                       "a beam disappears when N/A + M c/I in its face section reaches this (Liu et al. 2019 §2.3)"),
-        opt::positive("shear_strength", d.shear_strength, "Pa", "… or when V/A + T c/J reaches this"),
-        opt::number("weibull_modulus", d.weibull_modulus, 0, 100, "",
+        opt::positive("shear_strength", &S::shear_strength, "Pa", "… or when V/A + T c/J reaches this"),
+        opt::number("weibull_modulus", &S::weibull_modulus, 0, 100, "",
                     "> 0: both strengths × one Weibull factor of mean 1 per grain; 0: nominal strengths"),
-        opt::number("threshold_factor", d.threshold_factor, 0, inf, "",
+        opt::number("threshold_factor", &S::threshold_factor, 0, inf, "",
                     "screening force = this × tensile_strength × d_e² (the Brazilian splitting load is ≈ 1.1×)"),
         // Loading and relaxation.
-        opt::number("zone_radius_factor", d.zone_radius_factor, 0, 100, "",
+        opt::number("zone_radius_factor", &S::zone_radius_factor, 0, 100, "",
                     "a contact loads the blocks within this × mean block edge of it (at least the nearest)"),
-        opt::integer("ramp_steps", d.ramp_steps, 1, 1'000'000'000, "relaxation steps over which the load grows to full"),
-        opt::number("damping", d.damping, 0, 0.99, "", "local (non-viscous) damping coefficient of the relaxation"),
-        opt::number("mass_factor", d.mass_factor, 0.3, 1e6, "",
+        opt::integer("ramp_steps", &S::ramp_steps, 1, 1'000'000'000, "relaxation steps over which the load grows to full"),
+        opt::number("damping", &S::damping, 0, 0.99, "", "local (non-viscous) damping coefficient of the relaxation"),
+        opt::number("mass_factor", &S::mass_factor, 0.3, 1e6, "",
                     "fictitious block mass / its stiffness row sum (dynamic relaxation; < 0.5 may be unstable)"),
-        opt::positive_below("rest_tolerance", d.rest_tolerance, 1, false, "",
+        opt::positive_below("rest_tolerance", &S::rest_tolerance, 1, false, "",
                             "at rest when the largest out-of-balance force ≤ this × the largest block load"),
-        opt::integer("post_split_steps", d.post_split_steps, 0, 1'000'000'000, "steps after the first split (load held)"),
-        opt::integer("quiet_steps", d.quiet_steps, 1, 1'000'000'000,
+        opt::integer("post_split_steps", &S::post_split_steps, 0, 1'000'000'000, "steps after the first split (load held)"),
+        opt::integer("quiet_steps", &S::quiet_steps, 1, 1'000'000'000,
                      "at full load, intact once no beam has broken for this many steps (loose blocks never rest)"),
-        opt::integer("max_steps", d.max_steps, 1, 1'000'000'000, "steps per analysis at most (outcome step_limit)"),
-        opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
-        opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
+        opt::integer("max_steps", &S::max_steps, 1, 1'000'000'000, "steps per analysis at most (outcome step_limit)"),
+        opt::integer("check_interval", &S::check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
+        opt::number("min_child_fraction", &S::min_child_fraction, 0, 0.5, "",
                     "smaller block sets (by volume) are fines, attached to the nearest piece"),
     };
   }();
@@ -65,47 +65,14 @@ const OptionTable& block_beam_options() {
 
 BbOptions bb_options_from_config(const Config& cfg) {
   cfg.string("type", "block_beam");
-  const Options r(cfg, block_beam_options());
   BbOptions o;
-  o.blocks_per_diameter = r.number("blocks_per_diameter");
-  o.facet_distance = r.number("facet_distance");
-  o.min_blocks = r.integer("min_blocks");
-  o.tensile_strength = r.number("tensile_strength");
-  o.shear_strength = r.number("shear_strength");
-  o.weibull_modulus = r.number("weibull_modulus");
-  o.threshold_factor = r.number("threshold_factor");
-  o.zone_radius_factor = r.number("zone_radius_factor");
-  o.ramp_steps = r.integer("ramp_steps");
-  o.damping = r.number("damping");
-  o.mass_factor = r.number("mass_factor");
-  o.rest_tolerance = r.number("rest_tolerance");
-  o.post_split_steps = r.integer("post_split_steps");
-  o.quiet_steps = r.integer("quiet_steps");
-  o.max_steps = r.integer("max_steps");
-  o.check_interval = r.integer("check_interval");
-  o.min_child_fraction = r.number("min_child_fraction");
-  try {
-    validate(o);
-  } catch (const std::invalid_argument& e) {
-    cfg.fail("", e.what());
-  }
+  read_options(cfg, block_beam_options(), o);
   return o;
 }
 
 void validate(const BbOptions& o) {
-  require(o.blocks_per_diameter >= 1 && o.blocks_per_diameter <= 100, "blocks_per_diameter must lie in [1, 100]");
-  require(o.facet_distance >= 0 && o.facet_distance <= 1, "facet_distance must lie in [0, 1]");
-  require(o.min_blocks >= 2, "min_blocks must be >= 2");
-  require(o.tensile_strength > 0 && o.shear_strength > 0, "tensile_strength and shear_strength must be > 0");
-  require(o.weibull_modulus >= 0, "weibull_modulus must be >= 0");
-  require(o.threshold_factor >= 0, "threshold_factor must be >= 0");
-  require(o.zone_radius_factor >= 0, "zone_radius_factor must be >= 0");
-  require(o.ramp_steps >= 1 && o.max_steps >= 1 && o.quiet_steps >= 1 && o.check_interval >= 1 && o.post_split_steps >= 0,
-          "ramp_steps, max_steps, check_interval >= 1 and post_split_steps >= 0");
-  require(o.damping >= 0 && o.damping < 1, "damping must lie in [0, 1)");
-  require(o.mass_factor >= 0.3, "mass_factor must be >= 0.3");
-  require(o.rest_tolerance > 0 && o.rest_tolerance <= 1, "rest_tolerance must lie in (0, 1]");
-  require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
+  // Every option in its declared range (block_beam_options).
+  check_options(block_beam_options(), o, "block_beam");
 }
 
 TetMesh bb_mesh(const Shape& shape, const BbOptions& o) {

@@ -202,51 +202,51 @@ PointClusters clusters_of(const bpm::Array& a, const std::vector<char>& intact, 
 // ---------------------------------------------------------------- options
 
 const OptionTable& bonded_particles_options() {
+  using S = BpmOptions;
   static const OptionTable t = [] {
     const double inf = std::numeric_limits<double>::infinity();
-    const BpmOptions d;
     return OptionTable{
         // Discretisation (DA-BPM, "Densely arrayed BPM").
-        opt::number("element_diameter", d.element_diameter, 0, 1, "m",
+        opt::number("element_diameter", &S::element_diameter, 0, 1, "m",
                     "diameter of the densely arrayed elements (the same in every grain and fragment, as in the "
                     "DA-BPM paper); 0 = the grain's d_e / elements_across"),
-        opt::number("elements_across", d.elements_across, 2, 200, "",
+        opt::number("elements_across", &S::elements_across, 2, 200, "",
                     "elements across a grain's equivalent diameter when element_diameter is 0"),
-        opt::integer("min_elements", d.min_elements, 2, 100'000'000,
+        opt::integer("min_elements", &S::min_elements, 2, 100'000'000,
                      "a grain of fewer elements cannot break (outcome too_few_elements)"),
         // Parallel bonds (DA-BPM, "Parallel bond"; Potyondy & Cundall 2004).
-        opt::positive("normal_strength", d.normal_strength, "Pa", "tensile strength of a parallel bond"),
-        opt::positive("shear_strength", d.shear_strength, "Pa", "shear strength of a parallel bond"),
-        opt::number("radius_multiplier", d.radius_multiplier, 0.01, 1, "", "bond radius / element radius"),
-        opt::number("ks_kn_ratio", d.ks_kn_ratio, -1, 10, "",
+        opt::positive("normal_strength", &S::normal_strength, "Pa", "tensile strength of a parallel bond"),
+        opt::positive("shear_strength", &S::shear_strength, "Pa", "shear strength of a parallel bond"),
+        opt::number("radius_multiplier", &S::radius_multiplier, 0.01, 1, "", "bond radius / element radius"),
+        opt::number("ks_kn_ratio", &S::ks_kn_ratio, -1, 10, "",
                     "shear / normal bond stiffness; negative = from the material's Poisson ratio "
                     "((1-3ν)/(1+ν) in 2D, (1-4ν)/(1+ν) in 3D, 0 beyond ν = 1/3, 1/4)"),
-        opt::number("weibull_modulus", d.weibull_modulus, 0, 100, "",
+        opt::number("weibull_modulus", &S::weibull_modulus, 0, 100, "",
                     "Weibull scatter of a grain's bond strengths (crumble's addition; 0 = none, as in the paper)"),
-        opt::number("threshold_fraction", d.threshold_fraction, 0, 10, "",
+        opt::number("threshold_fraction", &S::threshold_fraction, 0, 10, "",
                     "screening force = this × the diametral crushing estimate (π/2)σd (2D, N/m), σd²/0.9 (3D)"),
         // Loading and integration.
-        opt::number("zone_radius_factor", d.zone_radius_factor, 0, 100, "",
+        opt::number("zone_radius_factor", &S::zone_radius_factor, 0, 100, "",
                     "a contact force acts on the elements within this many element diameters of the nearest one"),
-        opt::number("contact_tolerance_factor", d.contact_tolerance_factor, 0, inf, "",
+        opt::number("contact_tolerance_factor", &S::contact_tolerance_factor, 0, inf, "",
                     "a contact farther than this × element diameter from every element: outcome contact_off_grain"),
-        opt::number("damping", d.damping, 0, 0.99, "", "local non-viscous damping coefficient α (Cundall)"),
-        opt::integer("ramp_steps", d.ramp_steps, 1, 1'000'000'000, "steps over which the contact forces grow to full"),
-        opt::boolean("elastic_preload", d.elastic_preload,
+        opt::number("damping", &S::damping, 0, 0.99, "", "local non-viscous damping coefficient α (Cundall)"),
+        opt::integer("ramp_steps", &S::ramp_steps, 1, 1'000'000'000, "steps over which the contact forces grow to full"),
+        opt::boolean("elastic_preload", &S::elastic_preload,
                      "start from the static solution just below the first bond failure (intact at once if none fails)"),
-        opt::number("preload_fraction", d.preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
-        opt::integer("hold_steps", d.hold_steps, 0, 1'000'000'000, "least steps at full load before an intact verdict"),
-        opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "",
+        opt::number("preload_fraction", &S::preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
+        opt::integer("hold_steps", &S::hold_steps, 0, 1'000'000'000, "least steps at full load before an intact verdict"),
+        opt::number("ke_tolerance", &S::ke_tolerance, 0, 1, "",
                     "at rest when the kinetic energy <= this × the work of the loads"),
-        opt::integer("quiet_steps", d.quiet_steps, 1, 1'000'000'000,
+        opt::integer("quiet_steps", &S::quiet_steps, 1, 1'000'000'000,
                      "intact too when no bond has broken for this many steps at the full load"),
-        opt::integer("post_split_steps", d.post_split_steps, 0, 1'000'000'000,
+        opt::integer("post_split_steps", &S::post_split_steps, 0, 1'000'000'000,
                      "steps integrated at the split load after the first split"),
-        opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
-        opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
-        opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
+        opt::integer("max_steps", &S::max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
+        opt::integer("check_interval", &S::check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
+        opt::number("min_child_fraction", &S::min_child_fraction, 0, 0.5, "",
                     "pieces with fewer elements are fines, attached to the nearest piece"),
-        opt::integer("min_piece_elements", d.min_piece_elements, 1, 100'000'000,
+        opt::integer("min_piece_elements", &S::min_piece_elements, 1, 100'000'000,
                      "pieces of fewer elements are fines too (an absolute floor on the fragment size)"),
     };
   }();
@@ -255,56 +255,14 @@ const OptionTable& bonded_particles_options() {
 
 BpmOptions bpm_options_from_config(const Config& cfg) {
   cfg.string("type", "bonded_particles");
-  const Options r(cfg, bonded_particles_options());
   BpmOptions o;
-  o.element_diameter = r.number("element_diameter");
-  o.elements_across = r.number("elements_across");
-  o.min_elements = r.integer("min_elements");
-  o.normal_strength = r.number("normal_strength");
-  o.shear_strength = r.number("shear_strength");
-  o.radius_multiplier = r.number("radius_multiplier");
-  o.ks_kn_ratio = r.number("ks_kn_ratio");
-  o.weibull_modulus = r.number("weibull_modulus");
-  o.threshold_fraction = r.number("threshold_fraction");
-  o.zone_radius_factor = r.number("zone_radius_factor");
-  o.contact_tolerance_factor = r.number("contact_tolerance_factor");
-  o.damping = r.number("damping");
-  o.ramp_steps = r.integer("ramp_steps");
-  o.elastic_preload = r.boolean("elastic_preload");
-  o.preload_fraction = r.number("preload_fraction");
-  o.hold_steps = r.integer("hold_steps");
-  o.ke_tolerance = r.number("ke_tolerance");
-  o.quiet_steps = r.integer("quiet_steps");
-  o.post_split_steps = r.integer("post_split_steps");
-  o.max_steps = r.integer("max_steps");
-  o.check_interval = r.integer("check_interval");
-  o.min_child_fraction = r.number("min_child_fraction");
-  o.min_piece_elements = r.integer("min_piece_elements");
-  try {
-    validate(o);
-  } catch (const std::invalid_argument& e) {
-    cfg.fail("", e.what());
-  }
+  read_options(cfg, bonded_particles_options(), o);
   return o;
 }
 
 void validate(const BpmOptions& o) {
-  require(o.element_diameter >= 0 && std::isfinite(o.element_diameter), "element_diameter must be >= 0");
-  require(o.elements_across >= 2, "elements_across must be >= 2");
-  require(o.min_elements >= 2, "min_elements must be >= 2");
-  require(o.normal_strength > 0 && o.shear_strength > 0, "bond strengths must be > 0");
-  require(o.radius_multiplier > 0 && o.radius_multiplier <= 1, "radius_multiplier must lie in (0, 1]");
-  require(o.weibull_modulus >= 0, "weibull_modulus must be >= 0");
-  require(o.threshold_fraction >= 0, "threshold_fraction must be >= 0");
-  require(o.zone_radius_factor >= 0 && o.contact_tolerance_factor >= 0, "zone factors must be >= 0");
-  require(o.damping >= 0 && o.damping < 1, "damping must lie in [0, 1)");
-  require(o.ramp_steps >= 1 && o.hold_steps >= 0 && o.post_split_steps >= 0 && o.max_steps >= 1 &&
-              o.check_interval >= 1,
-          "step counts must be >= 1 (hold_steps, post_split_steps >= 0)");
-  require(o.ke_tolerance >= 0, "ke_tolerance must be >= 0");
-  require(o.quiet_steps >= 1, "quiet_steps must be >= 1");
-  require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
-  require(o.min_piece_elements >= 1, "min_piece_elements must be >= 1");
+  // Every option in its declared range (bonded_particles_options).
+  check_options(bonded_particles_options(), o, "bonded_particles");
 }
 
 double bpm_crush_estimate(int dimension, double sigma, double d) {

@@ -193,62 +193,62 @@ Lattice grain_lattice(const Shape& shape, const PdOptions& o, double d_e, const 
 // ---------------------------------------------------------------- options
 
 const OptionTable& peridynamics_options() {
+  using S = PdOptions;
   static const OptionTable t = [] {
     const double inf = std::numeric_limits<double>::infinity();
-    const PdOptions d;
     return OptionTable{
         // Strength (Zhu & Zhao 2019 §4, eqs. 12–15).
-        opt::positive("gc0", d.gc0, "J/m²", "reference critical energy release rate G_c0 at d0 (Zhu & Zhao 2019, eq. 13)"),
-        opt::positive("d0", d.d0, "m", "reference diameter of gc0 (eq. 13)"),
-        opt::positive("weibull_modulus", d.weibull_modulus, "", "Weibull modulus ψ (eq. 13)"),
-        opt::boolean("weibull", d.weibull, "false: every grain has G_c0 scaled by eq. 15 only (deterministic)"),
-        opt::number("weibull_a", d.weibull_a, -inf, 0, "", "a of the linear fit of eq. 12"),
-        opt::number("weibull_b", d.weibull_b, 1, inf, "", "b of the linear fit of eq. 12"),
-        opt::number("threshold_force_ref", d.threshold_force_ref, 0, inf, "N",
+        opt::positive("gc0", &S::gc0, "J/m²", "reference critical energy release rate G_c0 at d0 (Zhu & Zhao 2019, eq. 13)"),
+        opt::positive("d0", &S::d0, "m", "reference diameter of gc0 (eq. 13)"),
+        opt::positive("weibull_modulus", &S::weibull_modulus, "", "Weibull modulus ψ (eq. 13)"),
+        opt::boolean("weibull", &S::weibull, "false: every grain has G_c0 scaled by eq. 15 only (deterministic)"),
+        opt::number("weibull_a", &S::weibull_a, -inf, 0, "", "a of the linear fit of eq. 12"),
+        opt::number("weibull_b", &S::weibull_b, 1, inf, "", "b of the linear fit of eq. 12"),
+        opt::number("threshold_force_ref", &S::threshold_force_ref, 0, inf, "N",
                     "screening force of the reference grain, scaled as F_ref·√(G_c/G_c0)·(d/d0)² (eqs. 12, 14)"),
         // Discretisation (§3.1).
-        opt::number("spacing_fraction", d.spacing_fraction, 1e-3, 0.5, "", "lattice spacing / d_e"),
-        opt::number("horizon_factor", d.horizon_factor, 1, 8, "", "horizon δ / spacing"),
-        opt::choice("lattice_alignment", d.align_lattice_to_load ? "load" : "body", {"load", "body"},
+        opt::number("spacing_fraction", &S::spacing_fraction, 1e-3, 0.5, "", "lattice spacing / d_e"),
+        opt::number("horizon_factor", &S::horizon_factor, 1, 8, "", "horizon δ / spacing"),
+        opt::mapped_choice("lattice_alignment", &S::align_lattice_to_load, {{"load", true}, {"body", false}},
                     "\"load\": one lattice axis along the largest contact force (orientation-free strength); "
                     "\"body\": the body axes"),
-        opt::boolean("partial_volumes", d.partial_volumes,
+        opt::boolean("partial_volumes", &S::partial_volumes,
                      "neighbours weighted by the part of their cell inside δ (isotropic E, +10 % strength)"),
-        opt::boolean("volume_correction", d.volume_correction, "point volume = grain volume / points (else spacing³)"),
-        opt::integer("min_points", d.min_points, 2, 100'000'000, "fewer lattice points: outcome too_few_points"),
-        opt::positive("d_ref", d.d_ref, "m", "size correction of the critical stretch (eq. 16)"),
+        opt::boolean("volume_correction", &S::volume_correction, "point volume = grain volume / points (else spacing³)"),
+        opt::integer("min_points", &S::min_points, 2, 100'000'000, "fewer lattice points: outcome too_few_points"),
+        opt::positive("d_ref", &S::d_ref, "m", "size correction of the critical stretch (eq. 16)"),
         // Loading (§3.1, §5).
-        opt::number("zone_radius_factor", d.zone_radius_factor, 0, 100, "", "contact zone radius / spacing"),
-        opt::number("contact_tolerance_factor", d.contact_tolerance_factor, 0, inf, "",
+        opt::number("zone_radius_factor", &S::zone_radius_factor, 0, 100, "", "contact zone radius / spacing"),
+        opt::number("contact_tolerance_factor", &S::contact_tolerance_factor, 0, inf, "",
                     "a contact farther than this × spacing from the lattice: outcome contact_off_grain"),
-        opt::positive("loading_rate_large", d.rate_large, "N/s", "force ramp rate for d_e ≥ loading_rate_size_large (§5)"),
-        opt::positive("loading_rate_medium", d.rate_medium, "N/s", "force ramp rate between the two sizes (§5)"),
-        opt::positive("loading_rate_small", d.rate_small, "N/s", "force ramp rate for d_e < loading_rate_size_small (§5)"),
-        opt::positive("loading_rate_size_large", d.size_large, "m", "size above which loading_rate_large applies"),
-        opt::positive("loading_rate_size_small", d.size_small, "m", "size below which loading_rate_small applies"),
+        opt::positive("loading_rate_large", &S::rate_large, "N/s", "force ramp rate for d_e ≥ loading_rate_size_large (§5)"),
+        opt::positive("loading_rate_medium", &S::rate_medium, "N/s", "force ramp rate between the two sizes (§5)"),
+        opt::positive("loading_rate_small", &S::rate_small, "N/s", "force ramp rate for d_e < loading_rate_size_small (§5)"),
+        opt::positive("loading_rate_size_large", &S::size_large, "m", "size above which loading_rate_large applies"),
+        opt::positive("loading_rate_size_small", &S::size_small, "m", "size below which loading_rate_small applies"),
         // Time integration.
-        opt::number("dt_safety", d.dt_safety, 1e-3, 1, "", "fraction of the stable step"),
-        opt::choice("dt_rule", d.dt_rule, {"spectral", "silling_askari"},
+        opt::number("dt_safety", &S::dt_safety, 1e-3, 1, "", "fraction of the stable step"),
+        opt::choice("dt_rule", &S::dt_rule, {"spectral", "silling_askari"},
                     "stable step from the largest eigenfrequency, or the Silling–Askari bound (≈ 2.2× smaller)"),
-        opt::number("density_scale", d.density_scale, 1, 1e8, "",
+        opt::number("density_scale", &S::density_scale, 1, 1e8, "",
                     "density scaling inside the analysis (measured: +1 % on the crushing force)"),
-        opt::boolean("elastic_preload", d.elastic_preload,
+        opt::boolean("elastic_preload", &S::elastic_preload,
                      "start from the static solution just below the first bond failure"),
-        opt::number("preload_fraction", d.preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
-        opt::number("preload_tolerance", d.preload_tolerance, 1e-14, 1e-2, "", "relative residual of the static solve"),
-        opt::number("damping_ratio", d.damping_ratio, 0, 10, "", "mass-proportional damping ratio of the analysis"),
-        opt::number("hold_transits", d.hold_transits, 0, 1e6, "",
+        opt::number("preload_fraction", &S::preload_fraction, 0, 1, "", "of the load factor that breaks the first bond"),
+        opt::number("preload_tolerance", &S::preload_tolerance, 1e-14, 1e-2, "", "relative residual of the static solve"),
+        opt::number("damping_ratio", &S::damping_ratio, 0, 10, "", "mass-proportional damping ratio of the analysis"),
+        opt::number("hold_transits", &S::hold_transits, 0, 1e6, "",
                     "least hold at full load, in P-wave transits of d_e, until the kinetic energy decays"),
-        opt::number("max_hold_transits", d.max_hold_transits, 0, 1e7, "", "give up waiting for rest after this"),
-        opt::number("ke_tolerance", d.ke_tolerance, 0, 1, "", "at rest when the kinetic energy ≤ this × the elastic work"),
-        opt::number("post_split_transits", d.post_split_transits, 0, 1e6, "", "wave transits integrated after the first split"),
-        opt::integer("max_steps", d.max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
-        opt::integer("check_interval", d.check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
-        opt::integer("threads", d.threads, 1, 1024,
+        opt::number("max_hold_transits", &S::max_hold_transits, 0, 1e7, "", "give up waiting for rest after this"),
+        opt::number("ke_tolerance", &S::ke_tolerance, 0, 1, "", "at rest when the kinetic energy ≤ this × the elastic work"),
+        opt::number("post_split_transits", &S::post_split_transits, 0, 1e6, "", "wave transits integrated after the first split"),
+        opt::integer("max_steps", &S::max_steps, 1, 1'000'000'000'000L, "steps per analysis at most (outcome step_limit)"),
+        opt::integer("check_interval", &S::check_interval, 1, 1'000'000, "steps between connectivity and rest checks"),
+        opt::integer("threads", &S::threads, 1, 1024,
                      "threads inside one analysis when a check analyses several grains (they already run in "
                      "parallel); a check that analyses one grain gives it all of the run's threads"),
         // Outcome (§3.2).
-        opt::number("min_child_fraction", d.min_child_fraction, 0, 0.5, "",
+        opt::number("min_child_fraction", &S::min_child_fraction, 0, 0.5, "",
                     "smaller clusters are fines, attached to the nearest piece"),
     };
   }();
@@ -257,44 +257,8 @@ const OptionTable& peridynamics_options() {
 
 PdOptions pd_options_from_config(const Config& cfg) {
   cfg.string("type", "peridynamics");
-  const Options r(cfg, peridynamics_options());
   PdOptions o;
-  o.spacing_fraction = r.number("spacing_fraction");
-  o.horizon_factor = r.number("horizon_factor");
-  o.partial_volumes = r.boolean("partial_volumes");
-  o.align_lattice_to_load = r.string("lattice_alignment") == "load";
-  o.volume_correction = r.boolean("volume_correction");
-  o.min_points = r.integer("min_points");
-  o.d_ref = r.number("d_ref");
-  o.zone_radius_factor = r.number("zone_radius_factor");
-  o.contact_tolerance_factor = r.number("contact_tolerance_factor");
-  o.rate_large = r.number("loading_rate_large");
-  o.rate_medium = r.number("loading_rate_medium");
-  o.rate_small = r.number("loading_rate_small");
-  o.size_large = r.number("loading_rate_size_large");
-  o.size_small = r.number("loading_rate_size_small");
-  o.dt_safety = r.number("dt_safety");
-  o.dt_rule = r.string("dt_rule");
-  o.damping_ratio = r.number("damping_ratio");
-  o.density_scale = r.number("density_scale");
-  o.hold_transits = r.number("hold_transits");
-  o.max_hold_transits = r.number("max_hold_transits");
-  o.ke_tolerance = r.number("ke_tolerance");
-  o.post_split_transits = r.number("post_split_transits");
-  o.elastic_preload = r.boolean("elastic_preload");
-  o.preload_fraction = r.number("preload_fraction");
-  o.preload_tolerance = r.number("preload_tolerance");
-  o.max_steps = r.integer("max_steps");
-  o.check_interval = r.integer("check_interval");
-  o.threads = static_cast<int>(r.integer("threads"));
-  o.min_child_fraction = r.number("min_child_fraction");
-  o.weibull = r.boolean("weibull");
-  o.gc0 = r.number("gc0");
-  o.d0 = r.number("d0");
-  o.weibull_modulus = r.number("weibull_modulus");
-  o.weibull_a = r.number("weibull_a");
-  o.weibull_b = r.number("weibull_b");
-  o.threshold_force_ref = r.number("threshold_force_ref");
+  read_options(cfg, peridynamics_options(), o);
   try {
     validate(o);
   } catch (const std::invalid_argument& e) {
@@ -304,24 +268,11 @@ PdOptions pd_options_from_config(const Config& cfg) {
 }
 
 void validate(const PdOptions& o) {
-  require(o.spacing_fraction > 0 && o.spacing_fraction <= 0.5, "spacing_fraction must lie in (0, 0.5]");
-  require(o.horizon_factor >= 1 && o.horizon_factor <= 8, "horizon_factor must lie in [1, 8]");
-  require(o.min_points >= 2, "min_points must be >= 2");
-  require(o.d_ref > 0, "d_ref must be > 0");
-  require(o.zone_radius_factor >= 0, "zone_radius_factor must be >= 0");
-  require(o.contact_tolerance_factor >= 0, "contact_tolerance_factor must be >= 0");
-  require(o.rate_large > 0 && o.rate_medium > 0 && o.rate_small > 0, "loading rates must be > 0");
-  require(o.size_small > 0 && o.size_large >= o.size_small, "loading_rate_size_small <= loading_rate_size_large");
-  require(o.dt_safety > 0 && o.dt_safety <= 1, "dt_safety must lie in (0, 1]");
-  require(o.dt_rule == "spectral" || o.dt_rule == "silling_askari", "dt_rule must be spectral or silling_askari");
-  require(o.damping_ratio >= 0, "damping_ratio must be >= 0");
-  require(o.density_scale >= 1, "density_scale must be >= 1");
-  require(o.max_steps >= 1 && o.check_interval >= 1 && o.threads >= 1, "max_steps, check_interval, threads >= 1");
-  require(o.min_child_fraction >= 0 && o.min_child_fraction <= 0.5, "min_child_fraction must lie in [0, 0.5]");
-  require(o.gc0 > 0 && o.d0 > 0 && o.weibull_modulus > 0, "gc0, d0, weibull_modulus must be > 0");
+  // Every option in its declared range (peridynamics_options), then what spans several.
+  check_options(peridynamics_options(), o, "peridynamics");
+  require(o.size_large >= o.size_small, "loading_rate_size_small <= loading_rate_size_large");
   // eq. 12 with U in [0, 1) must give a positive strength: (U − b)/a > 0 for a < 0 < 1 <= b.
   require(o.weibull_a < 0 && o.weibull_b >= 1, "weibull_a must be < 0 and weibull_b >= 1 (eq. 12 positive)");
-  require(o.threshold_force_ref >= 0, "threshold_force_ref must be >= 0");
 }
 
 // ---------------------------------------------------------------- strength

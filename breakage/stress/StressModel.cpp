@@ -32,39 +32,38 @@ std::string joined(const std::vector<std::string>& names) {
 // The criteria are declared once, in their own table (Criteria.cpp): the choices of
 // "criterion" and the per-criterion defaults below are read from it.
 const OptionTable& stress_options() {
+  using S = StressOptions;
   static const OptionTable t = [] {
-    const StressOptions d;
     std::string strengths, tensile;
     for (const auto& c : stress::criteria()) {
       strengths += (strengths.empty() ? "" : ", ") + c.name + " " + option_number_text(c.default_strength);
       if (c.default_tensile_strength > 0)
         tensile += (tensile.empty() ? "" : ", ") + c.name + " " + option_number_text(c.default_tensile_strength);
     }
-    OptionSpec strength = opt::positive("strength", 0, "Pa",
-                                        "characteristic strength σ0 at reference_diameter (Harmon et al. 2020, "
-                                        "eqs. 11–12)");
-    strength.def = std::monostate{};
-    strength.default_doc = "per criterion (Harmon et al. 2020 Table 2): " + strengths + " Pa";
-    OptionSpec tensile_strength = opt::positive("tensile_strength", 0, "Pa",
-                                                "tensile strength (Harmon et al. 2020, eq. 8); an error with a "
-                                                "criterion without one");
-    tensile_strength.def = std::monostate{};
-    tensile_strength.default_doc = "per criterion (Table 2): " + tensile + " Pa";
+    // The criterion is read first: it gives the defaults of the two strengths.
+    const auto entry = [](const S& o) { return stress::find_criterion(o.criterion); };
     return OptionTable{
-        opt::choice("criterion", d.criterion, stress::criterion_names(),
+        opt::choice("criterion", &S::criterion, stress::criterion_names(),
                     "yield criterion of the average stress (Harmon et al. 2020 §3.1, eqs. 7–10)"),
-        strength,
-        tensile_strength,
-        opt::positive("weibull_modulus", d.weibull_modulus, "", "Weibull modulus m of eqs. 11–13 (Table 2)"),
-        opt::positive("reference_diameter", d.reference_diameter, "m",
+        opt::positive("strength", &S::strength, "Pa",
+                      "characteristic strength σ0 at reference_diameter (Harmon et al. 2020, eqs. 11–12)")
+            .depends<S>("per criterion (Harmon et al. 2020 Table 2): " + strengths + " Pa",
+                        [entry](const S& o) { return entry(o)->default_strength; }),
+        opt::positive("tensile_strength", &S::tensile_strength, "Pa",
+                      "tensile strength (Harmon et al. 2020, eq. 8); an error with a criterion without one")
+            .depends<S>("per criterion (Table 2): " + tensile + " Pa",
+                        [entry](const S& o) { return entry(o)->default_tensile_strength; })
+            .when<S>([entry](const S& o) { return entry(o)->default_tensile_strength > 0; }),
+        opt::positive("weibull_modulus", &S::weibull_modulus, "", "Weibull modulus m of eqs. 11–13 (Table 2)"),
+        opt::positive("reference_diameter", &S::reference_diameter, "m",
                       "d0 of eqs. 11–12 (Table 2: characteristic diameter d_c = 2 mm)"),
-        opt::boolean("weibull", d.weibull,
+        opt::boolean("weibull", &S::weibull,
                      "strength per grain by inverse-transform sampling (eq. 12), one variate per grain; false: σ0 "
                      "scaled to the grain's size by eq. 13"),
-        opt::number("min_piece_fraction", d.min_piece_fraction, 0, 0.45, "",
+        opt::number("min_piece_fraction", &S::min_piece_fraction, 0, 0.45, "",
                     "the fracture plane is moved along its normal until each side holds at least this fraction of "
                     "the grain (2D: area); 0 = the plane through the contacts as is (our decision, not the paper's)"),
-        opt::choice("plane_fallback", d.plane_fallback, {"centroid", "shift"},
+        opt::choice("plane_fallback", &S::plane_fallback, {"centroid", "shift"},
                     "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
                     "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
                     "if that fails too; shift = only shift the plane"),
@@ -74,23 +73,11 @@ const OptionTable& stress_options() {
 }
 
 StressOptions stress_options_from_config(const Config& cfg) {
-  const Options r(cfg, stress_options());
   StressOptions o;
-  o.criterion = r.string("criterion");
-  const stress::CriterionEntry* e = stress::find_criterion(o.criterion);
-  if (!e) r.fail("criterion", "unknown criterion '" + o.criterion + "'; known: " + joined(stress::criterion_names()));
-  o.weibull_modulus = r.number("weibull_modulus");
-  o.reference_diameter = r.number("reference_diameter");
-  o.strength = r.number("strength", e->default_strength);
-  if (e->default_tensile_strength > 0) {
-    o.tensile_strength = r.number("tensile_strength", e->default_tensile_strength);
-  } else if (r.has("tensile_strength")) {
-    r.fail("tensile_strength", "only the max_principal criterion has a tensile strength (Harmon et al. 2020, "
-                               "eq. 8); this scenario's criterion is '" + o.criterion + "'");
-  }
-  o.weibull = r.boolean("weibull");
-  o.min_piece_fraction = r.number("min_piece_fraction");
-  o.plane_fallback = r.string("plane_fallback");
+  read_options(cfg, stress_options(), o);
+  if (cfg.has("tensile_strength") && !(stress::find_criterion(o.criterion)->default_tensile_strength > 0))
+    cfg.fail("tensile_strength", "only the max_principal criterion has a tensile strength (Harmon et al. 2020, "
+                                 "eq. 8); this scenario's criterion is '" + o.criterion + "'");
   return o;
 }
 
@@ -238,10 +225,11 @@ StressModel::StressModel(StressOptions o, int dimension)
     : o_(std::move(o)), dim_(dimension), entry_(stress::find_criterion(o_.criterion)) {
   require(entry_ != nullptr, "unknown criterion '" + o_.criterion + "'; known: " + joined(stress::criterion_names()));
   require(dim_ == 2 || dim_ == 3, "dimension must be 2 or 3");
-  require(o_.weibull_modulus > 0 && o_.reference_diameter > 0, "weibull_modulus and reference_diameter must be > 0");
-  require(o_.min_piece_fraction >= 0 && o_.min_piece_fraction < 0.5, "min_piece_fraction must be in [0, 0.5)");
+  // 0 (the struct's default): the criterion's Table 2 value; then every option in its
+  // declared range (stress_options).
   if (o_.strength <= 0) o_.strength = entry_->default_strength;
   if (o_.tensile_strength <= 0) o_.tensile_strength = entry_->default_tensile_strength;
+  check_options(stress_options(), o_, "stress");
   criterion_ = entry_->make();
 }
 

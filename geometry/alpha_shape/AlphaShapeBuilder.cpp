@@ -93,11 +93,8 @@ TriMesh cube_hull(const std::vector<Vec3>& pts, double spacing) {
 }  // namespace
 
 AlphaShapeBuilder::AlphaShapeBuilder(AlphaShapeBuilderOptions opt) : opt_(std::move(opt)) {
-  if (!(opt_.hull_diameter >= 0) || !(opt_.hull_convexity >= 0) || !(opt_.min_piece_volume_fraction >= 0) ||
-      !(opt_.min_piece_volume_fraction < 0.5) ||
-      !(opt_.min_piece_thickness_fraction >= 0) || !(opt_.min_piece_thickness_fraction <= 0.5))
-    throw std::invalid_argument("AlphaShapeBuilder: need hull_diameter >= 0, hull_convexity >= 0, "
-                                "0 <= min_piece_volume_fraction < 0.5, 0 <= min_piece_thickness_fraction <= 0.5");
+  // Every option in its declared range (alpha_shape_options).
+  check_options(alpha_shape_options(), opt_, "AlphaShapeBuilder");
 }
 
 FragmentResult AlphaShapeBuilder::build(const Shape& parent, const Fracture& fracture) const {
@@ -343,30 +340,30 @@ std::vector<Fragment> AlphaShapeBuilder::finish(std::vector<TriMesh> meshes, dou
 }
 
 const OptionTable& alpha_shape_options() {
+  using S = AlphaShapeBuilderOptions;
+  using A = AlphaShapeOptions;
   static const OptionTable t = [] {
-    const AlphaShapeBuilderOptions d;
     return OptionTable{
-        opt::number("convex_hull_diameter", d.hull_diameter, 0, std::numeric_limits<double>::infinity(), "m",
+        opt::number("convex_hull_diameter", &S::hull_diameter, 0, std::numeric_limits<double>::infinity(), "m",
                     "children smaller than this become convex hulls (Zhu & Zhao 2019 §3.2)"),
-        opt::number("convex_hull_convexity", d.hull_convexity, 0, 2, "",
+        opt::number("convex_hull_convexity", &S::hull_convexity, 0, 2, "",
                     "children with V/V_hull at least this become convex hulls (> 1 disables)"),
-        opt::number("alpha_start_spacings", d.alpha.start_spacings, 0.5, 100, "",
+        opt::number("alpha_start_spacings", opt::nested(&S::alpha, &A::start_spacings), 0.5, 100, "",
                     "the alpha walk starts at √α = this × lattice spacing"),
-        opt::number("alpha_max_spacings", d.alpha.max_spacings, 0.5, 1e6, "",
+        opt::number("alpha_max_spacings", opt::nested(&S::alpha, &A::max_spacings), 0.5, 1e6, "",
                     "the walk gives up (convex-hull fallback) beyond √α = this × spacing; ≥ alpha_start_spacings"),
-        opt::integer("max_alpha_steps", d.alpha.max_steps, 1, 1000000, "candidate alphas examined before the fallback"),
-        opt::number("alpha_min_growth", d.alpha.min_growth, 0, 10, "", "least relative alpha increase between candidates"),
-        opt::choice("alpha_input", d.alpha_boundary_only ? "boundary_points" : "all_points",
-                    {"all_points", "boundary_points"},
+        opt::integer("max_alpha_steps", opt::nested(&S::alpha, &A::max_steps), 1, 1000000, "candidate alphas examined before the fallback"),
+        opt::number("alpha_min_growth", opt::nested(&S::alpha, &A::min_growth), 0, 10, "", "least relative alpha increase between candidates"),
+        opt::mapped_choice("alpha_input", &S::alpha_boundary_only, {{"all_points", false}, {"boundary_points", true}},
                     "points handed to the alpha shape: every cluster point and the fracture points, or the surface "
                     "and fracture points only"),
-        opt::choice("scale_about", d.scale_about_parent ? "parent_centroid" : "child_centroid",
-                    {"parent_centroid", "child_centroid"},
+        opt::mapped_choice("scale_about", &S::scale_about_parent,
+                           {{"parent_centroid", true}, {"child_centroid", false}},
                     "volume rescale about the parent's or each child's centroid"),
-        opt::number("min_piece_volume_fraction", d.min_piece_volume_fraction, 0, 0.1, "",
+        opt::number("min_piece_volume_fraction", &S::min_piece_volume_fraction, 0, 0.1, "",
                     "plane cuts: pieces below this × the parent's volume are removed as fines (counted as a fragment "
                     "fallback)"),
-        opt::number("min_piece_thickness_fraction", d.min_piece_thickness_fraction, 0, 0.5, "",
+        opt::number("min_piece_thickness_fraction", &S::min_piece_thickness_fraction, 0, 0.5, "",
                     "plane cuts: pieces thinner than this × the parent's equivalent diameter are removed as fines "
                     "(an engine cannot take such a sliver as a body)"),
     };
@@ -376,20 +373,10 @@ const OptionTable& alpha_shape_options() {
 
 std::unique_ptr<FragmentBuilder> make_alpha_shape_builder(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "alpha_shape");
-  const Options r(cfg, alpha_shape_options());
   AlphaShapeBuilderOptions o;
-  o.hull_diameter = r.number("convex_hull_diameter");
-  o.hull_convexity = r.number("convex_hull_convexity");
-  o.alpha.start_spacings = r.number("alpha_start_spacings");
-  o.alpha.max_spacings = r.number("alpha_max_spacings");
+  read_options(cfg, alpha_shape_options(), o);
   if (o.alpha.max_spacings < o.alpha.start_spacings)
-    r.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + fmt_num(o.alpha.start_spacings) + ")");
-  o.alpha.max_steps = static_cast<int>(r.integer("max_alpha_steps"));
-  o.alpha.min_growth = r.number("alpha_min_growth");
-  o.alpha_boundary_only = r.string("alpha_input") == "boundary_points";
-  o.scale_about_parent = r.string("scale_about") == "parent_centroid";
-  o.min_piece_volume_fraction = r.number("min_piece_volume_fraction");
-  o.min_piece_thickness_fraction = r.number("min_piece_thickness_fraction");
+    cfg.fail("alpha_max_spacings", "must be >= alpha_start_spacings (" + fmt_num(o.alpha.start_spacings) + ")");
   if (ctx.dimension != 3) cfg.fail("type", "fragment builder 'alpha_shape' is 3D only (scenario dimension " +
                                                std::to_string(ctx.dimension) + ")");
   return std::make_unique<AlphaShapeBuilder>(o);

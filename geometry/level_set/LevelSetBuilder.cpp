@@ -12,10 +12,8 @@
 namespace crumble {
 
 LevelSetBuilder::LevelSetBuilder(LevelSetBuilderOptions opt) : opt_(opt) {
-  if (!(opt_.spacing >= 0) || !std::isfinite(opt_.spacing) || !(opt_.min_thickness_cells >= 0) ||
-      !(opt_.min_piece_volume_fraction >= 0) || !(opt_.min_piece_volume_fraction < 0.5))
-    throw std::invalid_argument("LevelSetBuilder: need spacing >= 0, min_thickness_cells >= 0, "
-                                "0 <= min_piece_volume_fraction < 0.5");
+  // Every option in its declared range (level_set_options).
+  check_options(level_set_options(), opt_, "LevelSetBuilder");
 }
 
 FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fracture) const {
@@ -119,15 +117,15 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
 }
 
 const OptionTable& level_set_options() {
+  using S = LevelSetBuilderOptions;
   static const OptionTable t = [] {
-    const LevelSetBuilderOptions d;
     return OptionTable{
-        opt::number("spacing", d.spacing, 0, 1, "m",
+        opt::number("spacing", &S::spacing, 0, 1, "m",
                     "grid spacing of the children; 0 = the parent grid's (another value resamples the parent first)"),
-        opt::number("min_thickness_cells", d.min_thickness_cells, 0, 100, "",
+        opt::number("min_thickness_cells", &S::min_thickness_cells, 0, 100, "",
                     "a piece thinner than this many grid cells is removed (counted as removed mass and as a fragment "
                     "fallback)"),
-        opt::number("min_piece_volume_fraction", d.min_piece_volume_fraction, 0, 0.49, "",
+        opt::number("min_piece_volume_fraction", &S::min_piece_volume_fraction, 0, 0.49, "",
                     "a piece smaller than this × the parent's volume is removed (counted)"),
     };
   }();
@@ -136,11 +134,8 @@ const OptionTable& level_set_options() {
 
 std::unique_ptr<FragmentBuilder> make_level_set_builder(const Config& cfg, const EngineContext&) {
   cfg.string("type", "level_set");
-  const Options r(cfg, level_set_options());
   LevelSetBuilderOptions o;
-  o.spacing = r.number("spacing");
-  o.min_thickness_cells = r.number("min_thickness_cells");
-  o.min_piece_volume_fraction = r.number("min_piece_volume_fraction");
+  read_options(cfg, level_set_options(), o);
   return std::make_unique<LevelSetBuilder>(o);
 }
 

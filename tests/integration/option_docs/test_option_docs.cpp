@@ -249,3 +249,84 @@ TEST(Options, DefaultsComeFromTheTable) {
   EXPECT_EQ(crumble::option_number_text(0.002), "0.002");
   EXPECT_EQ(crumble::option_number_text(1e-4), "1e-4");
 }
+
+// Every scenario-level section has its generated block: a default changed in the code (or in
+// the docs) fails EveryDeclaredTableIsInTheDocsAsGenerated.
+TEST(OptionDocs, TheScenarioSectionsAreDocumented) {
+  std::map<std::string, std::string> docs;
+  for (const auto& b : crumble::option_doc_blocks(slurp(kDocs))) docs[b.name] = b.content;
+  for (const char* name : {"scenario", "materials", "container", "packing", "settle", "loading", "simulation",
+                           "guards", "schedule", "screening", "output", "scene", "jaw_crusher", "rocks", "walls",
+                           "motion"}) {
+    const auto found = crumble::find_options(name, "test");
+    ASSERT_EQ(found.size(), 1u) << name;
+    EXPECT_EQ(docs[name], crumble::option_table_markdown(*found.front().options)) << name;
+  }
+}
+
+namespace {
+struct Inner {
+  int steps = 4;
+};
+struct Bound {
+  double kn = 4e7;
+  std::string mode = "a";
+  double rate = 2;  // read only in mode "b"
+  bool aligned = true;
+  double strength = 0;  // default follows the mode
+  Inner inner;
+};
+const crumble::OptionTable& bound_table() {
+  namespace opt = crumble::opt;
+  static const crumble::OptionTable t = {
+      opt::positive("kn", &Bound::kn, "N/m", "stiffness"),
+      opt::choice("mode", &Bound::mode, {"a", "b"}, "mode"),
+      opt::positive("rate", &Bound::rate, "", "rate").when<Bound>([](const Bound& b) { return b.mode == "b"; }),
+      opt::mapped_choice("alignment", &Bound::aligned, {{"load", true}, {"body", false}}, "alignment"),
+      opt::positive("strength", &Bound::strength, "Pa", "strength")
+          .depends<Bound>("per mode", [](const Bound& b) { return b.mode == "a" ? 1.0 : 2.0; }),
+      opt::integer("steps", opt::nested(&Bound::inner, &Inner::steps), 1, 10, "steps"),
+  };
+  return t;
+}
+}  // namespace
+
+// A table bound to its struct fills it: defaults from the struct's initialisers (written back),
+// conditions and computed defaults in table order, ranges checked for read and built settings.
+TEST(Options, ABoundTableFillsItsStruct) {
+  nlohmann::json doc = {{"mode", "b"}, {"alignment", "body"}};
+  crumble::Config cfg(doc);
+  Bound b;
+  crumble::read_options(cfg, bound_table(), b);
+  EXPECT_EQ(b.kn, 4e7);
+  EXPECT_EQ(b.rate, 2.0);
+  EXPECT_FALSE(b.aligned);
+  EXPECT_EQ(b.strength, 2.0);
+  EXPECT_EQ(b.inner.steps, 4);
+  EXPECT_EQ(doc.dump(), R"({"alignment":"body","kn":40000000.0,"mode":"b","rate":2.0,"steps":4,"strength":2.0})");
+  EXPECT_EQ(crumble::option_default_text(bound_table()[3]), "\"load\"");
+  EXPECT_EQ(crumble::option_default_text(bound_table()[4]), "per mode");
+  // Mode "a" does not read "rate": the key is left unread (check_unknown reports it).
+  nlohmann::json other = {{"rate", 3}};
+  crumble::Config co(other);
+  Bound a;
+  crumble::read_options(co, bound_table(), a);
+  EXPECT_EQ(a.rate, 2.0);
+  EXPECT_EQ(a.strength, 1.0);
+  EXPECT_THROW(co.check_unknown(), crumble::ConfigError);
+  // Out of range: the read names the path, check_options the key.
+  nlohmann::json bad = {{"steps", 11}};
+  crumble::Config cb(bad);
+  Bound c;
+  EXPECT_THROW(crumble::read_options(cb, bound_table(), c), crumble::ConfigError);
+  c.inner.steps = 0;
+  try {
+    crumble::check_options(bound_table(), c, "test");
+    ADD_FAILURE() << "steps = 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "test: steps must lie in [1, 10], got 0");
+  }
+  // A table read into another struct is a programming error.
+  int wrong = 0;
+  EXPECT_THROW(crumble::read_options(cb, bound_table(), wrong), std::logic_error);
+}
