@@ -13,15 +13,23 @@ using Kind = OptionSpec::Kind;
 
 namespace opt {
 
-OptionSpec number(std::string key, double def, double min, double max, std::string unit, std::string doc) {
+namespace {
+// Every helper below: one spec of `kind` with its key, default, unit and line of doc.
+OptionSpec spec(std::string key, Kind kind, OptionSpec::Default def, std::string unit, std::string doc) {
   OptionSpec s;
   s.key = std::move(key);
-  s.kind = Kind::Number;
-  s.def = def;
-  s.min = min;
-  s.max = max;
+  s.kind = kind;
+  s.def = std::move(def);
   s.unit = std::move(unit);
   s.doc = std::move(doc);
+  return s;
+}
+}  // namespace
+
+OptionSpec number(std::string key, double def, double min, double max, std::string unit, std::string doc) {
+  OptionSpec s = spec(std::move(key), Kind::Number, def, std::move(unit), std::move(doc));
+  s.min = min;
+  s.max = max;
   return s;
 }
 
@@ -31,80 +39,44 @@ OptionSpec positive(std::string key, double def, std::string unit, std::string d
 }
 
 OptionSpec positive_below(std::string key, double def, double max, bool max_open, std::string unit, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Positive;
-  s.def = def;
+  OptionSpec s = spec(std::move(key), Kind::Positive, def, std::move(unit), std::move(doc));
   s.min = 0;
   s.max = max;
   s.max_open = max_open;
-  s.unit = std::move(unit);
-  s.doc = std::move(doc);
   return s;
 }
 
 OptionSpec integer(std::string key, long def, long min, long max, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Integer;
-  s.def = def;
+  OptionSpec s = spec(std::move(key), Kind::Integer, def, "", std::move(doc));
   s.int_min = min;
   s.int_max = max;
-  s.doc = std::move(doc);
   return s;
 }
 
 OptionSpec boolean(std::string key, bool def, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Boolean;
-  s.def = def;
-  s.doc = std::move(doc);
-  return s;
+  return spec(std::move(key), Kind::Boolean, def, "", std::move(doc));
 }
 
 OptionSpec choice(std::string key, std::string def, std::vector<std::string> choices, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Choice;
-  s.def = std::move(def);
+  OptionSpec s = spec(std::move(key), Kind::Choice, std::move(def), "", std::move(doc));
   s.choices = std::move(choices);
-  s.doc = std::move(doc);
   return s;
 }
 
 OptionSpec string(std::string key, std::string def, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::String;
-  s.def = std::move(def);
-  s.doc = std::move(doc);
-  return s;
+  return spec(std::move(key), Kind::String, std::move(def), "", std::move(doc));
 }
 
 OptionSpec numbers(std::string key, std::vector<double> def, std::string unit, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Numbers;
-  s.def = std::move(def);
-  s.unit = std::move(unit);
-  s.doc = std::move(doc);
-  return s;
+  return spec(std::move(key), Kind::Numbers, std::move(def), std::move(unit), std::move(doc));
 }
 
 OptionSpec vec3(std::string key, Vec3 def, std::string unit, std::string doc) {
-  OptionSpec s = numbers(std::move(key), {def.x, def.y, def.z}, std::move(unit), std::move(doc));
-  s.kind = Kind::Vector3;
-  return s;
+  return spec(std::move(key), Kind::Vector3, std::vector<double>{def.x, def.y, def.z}, std::move(unit), std::move(doc));
 }
 
 OptionSpec unsigned_integer(std::string key, std::uint64_t def, std::string doc) {
-  OptionSpec s;
-  s.key = std::move(key);
-  s.kind = Kind::Unsigned;
-  s.def = def;
-  s.doc = std::move(doc);
-  return s;
+  return spec(std::move(key), Kind::Unsigned, def, "", std::move(doc));
 }
 
 }  // namespace opt

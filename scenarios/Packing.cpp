@@ -235,14 +235,6 @@ void cloud_packing(const Config& pc, const PackingSettings& ps, bool height_give
   }
 }
 
-Quat quaternion_from(const Config& e, const std::string& key) {
-  auto q = e.numbers(key, {1, 0, 0, 0});
-  if (q.size() != 4) e.fail(key, "expected a quaternion [w, x, y, z]");
-  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (!(n > 0)) e.fail(key, "quaternion must be non-zero");
-  return Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
-}
-
 // An explicit list ("grains") or the packing.json of an earlier run ("file").
 void explicit_packing(const Config& pc, const Config& cc, const PackingSettings& ps, bool height_given, int dim,
                       PackingSpec& spec) {
@@ -277,11 +269,11 @@ void explicit_packing(const Config& pc, const Config& cc, const PackingSettings&
     Config sc = e.required_child("shape");
     g.shape = shape_from_config(sc, dim);
     g.shape_spec = sc.doc();
-    const Vec3 p = e.vec3("position", {0, 0, 0});
-    if (!is_finite(p)) e.fail("position", "must be finite");
-    g.position = p;
-    g.orientation = quaternion_from(e, "orientation");
-    g.material = static_cast<int>(e.integer("material", 0, 0));
+    const auto ge = read_options<GrainEntrySettings>(e, grain_entry_options());
+    if (!is_finite(ge.position)) e.fail("position", "must be finite");
+    g.position = ge.position;
+    g.orientation = quaternion_from(e, "orientation", ge.orientation);
+    g.material = static_cast<int>(ge.material);
     g.source = spec.type == "file" ? pc.path() + "/path (" + ps.path + ": " + e.path() + ")" : e.path();
     spec.grains.push_back(std::move(g));
   }
@@ -289,6 +281,13 @@ void explicit_packing(const Config& pc, const Config& cc, const PackingSettings&
 }
 
 }  // namespace
+
+Quat quaternion_from(const Config& c, const std::string& key, const std::vector<double>& q) {
+  if (q.size() != 4) c.fail(key, "expected a quaternion [w, x, y, z]");
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(n > 0)) c.fail(key, "quaternion must be non-zero");
+  return Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
+}
 
 PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng& rng) {
   PackingSpec spec;

@@ -11,6 +11,7 @@
 
 #include "core/Config.h"
 #include "core/Simulation.h"
+#include "scenarios/Sections.h"
 
 namespace crumble {
 
@@ -32,18 +33,6 @@ struct PlacedGrain {
   std::string source;  // JSON path of the entry it came from (errors: source + "/material")
 };
 
-// Settling is measured in simulated time so that engines with very different time steps
-// (Bullet's 8e-5 s, an explicit DEM's 1e-6 s) settle the same physical way.
-struct SettleSettings {
-  bool enabled = true;        // a generated cloud settles before loading
-  double stress = 10e3;       // Pa pushed by the platen while settling
-  double max_time = 0.5;      // s of simulated time at most
-  double dt = 0;              // s; 0 = the scenario's first time step (capped by the engine's bound)
-  double tolerance = 1e-3;    // platen travel per window, relative to the mean diameter
-  double window = 0.01;       // s between checks
-  double friction_scale = 1;  // friction × this while settling (0: frictionless, a denser packing)
-};
-
 struct PackingSpec {
   std::string type;  // "cloud" | "grains" | "file"
   std::vector<PlacedGrain> grains;
@@ -60,6 +49,9 @@ struct PackingSpec {
 
 // Reads the "packing" and "container" objects; for "cloud" draws the grains now.
 PackingSpec packing_from_config(const Config& packing, const Config& container, int dimension, Rng& rng);
+
+// The unit quaternion of `q` (read at `key` of `c`; the errors name it): [w, x, y, z], not zero.
+Quat quaternion_from(const Config& c, const std::string& key, const std::vector<double>& q);
 
 // The shape spec of a template (JSON) scaled by `factor`.
 nlohmann::json scaled_spec(const nlohmann::json& tmpl, double factor);

@@ -7,7 +7,6 @@
 #include "core/Schedule.h"
 #include "core/Screening.h"
 #include "core/Simulation.h"
-#include "scenarios/Packing.h"
 
 namespace crumble {
 
@@ -111,6 +110,16 @@ const OptionTable& packing_options() {
             .when<S>([](const S& s) { return s.type == "file"; }),
     };
   }();
+  return t;
+}
+
+const OptionTable& grain_entry_options() {
+  using S = GrainEntrySettings;
+  static const OptionTable t = {
+      opt::vec3("position", &S::position, "m", "the grain's centroid (finite)"),
+      opt::numbers("orientation", &S::orientation, "", "quaternion [w, x, y, z] (normalised; not zero)"),
+      opt::integer("material", &S::material, 0, kLongMax, "material index"),
+  };
   return t;
 }
 
@@ -340,6 +349,7 @@ std::vector<SectionOptions> scenario_sections() {
       {"container", "the rigid box", &container_options()},
       {"packing", "the packing (cloud, grains or file)", &packing_options()},
       {"settle", "packing.settle: how a cloud settles (Zhu & Zhao 2019 §5)", &settle_options()},
+      {"grains", "one entry of packing.grains (SHAPE, pose, material)", &grain_entry_options()},
       {"loading", "the platen's loading", &loading_options()},
       {"simulation", "loop settings", &simulation_options()},
       {"guards", "simulation.guards: physical invariants every engine must keep", &guard_options()},

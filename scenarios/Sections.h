@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Engine.h"
 #include "core/Options.h"
 #include "output/VtkWriter.h"
 
@@ -54,7 +55,27 @@ struct PackingSettings {
   long dimension = 3;   // set by the caller
 };
 const OptionTable& packing_options();
-const OptionTable& settle_options();  // packing.settle (scenarios/Packing.h SettleSettings)
+
+// One entry of packing.grains (or of a packing.json); its shape is read by hand.
+struct GrainEntrySettings {
+  Vec3 position;
+  std::vector<double> orientation{1, 0, 0, 0};
+  long material = 0;
+};
+const OptionTable& grain_entry_options();
+
+// Settling is measured in simulated time so that engines with very different time steps
+// (Bullet's 8e-5 s, an explicit DEM's 1e-6 s) settle the same physical way.
+struct SettleSettings {
+  bool enabled = true;        // a generated cloud settles before loading
+  double stress = 10e3;       // Pa pushed by the platen while settling
+  double max_time = 0.5;      // s of simulated time at most
+  double dt = 0;              // s; 0 = the scenario's first time step (capped by the engine's bound)
+  double tolerance = 1e-3;    // platen travel per window, relative to the mean diameter
+  double window = 0.01;       // s between checks
+  double friction_scale = 1;  // friction × this while settling (0: frictionless, a denser packing)
+};
+const OptionTable& settle_options();  // packing.settle
 
 const OptionTable& loading_options();     // core/Loading.h LoadingSettings
 const OptionTable& simulation_options();  // core/Simulation.h SimulationSettings (but time_steps, threads, guards)

@@ -10,13 +10,6 @@ namespace crumble {
 
 namespace {
 
-Quat orientation_from(const Config& c, const std::string& key, const std::vector<double>& q) {
-  if (q.size() != 4) c.fail(key, "expected a quaternion [w, x, y, z]");
-  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (!(n > 0)) c.fail(key, "quaternion must be non-zero");
-  return Quat{q[0] / n, q[1] / n, q[2] / n, q[3] / n};
-}
-
 WallMotion motion_from(const Config& m, int dim) {
   const auto w = read_options<WallMotion>(m, motion_options());
   if (w.type == WallMotion::Type::Velocity) {
@@ -46,7 +39,7 @@ MovingWall wall_from_config(const Config& c, int dim, const std::string& default
   w.name = ws.name;
   w.position = ws.position;
   if (dim == 2 && w.position.z != 0) c.fail("position", "a 2D wall lies in the x-y plane: z must be 0");
-  w.orientation = orientation_from(c, "orientation", ws.orientation);
+  w.orientation = quaternion_from(c, "orientation", ws.orientation);
   if (dim == 2 && (w.orientation.x != 0 || w.orientation.y != 0))
     c.fail("orientation", "a 2D wall turns about z only: [cos(a/2), 0, 0, sin(a/2)]");
   w.motion = motion_from(c.child("motion"), dim);
