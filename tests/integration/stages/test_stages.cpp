@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run/RunPipeline.h"
+#include "output/Writers.h"
 #include "tools/Stages.h"
 #include "tests/support/CliRunner.h"
 
