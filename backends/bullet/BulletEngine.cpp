@@ -2,6 +2,7 @@
 // rules of backends/rigid/RigidWorld.h (units: Bullet sees lengths × scale, seconds and
 // kilograms; impulses leave through force_si() and the same factors).
 #include "backends/bullet/BulletEngine.h"
+#include "backends/rigid/RigidWorld.h"
 #include "base/Format.h"
 
 #include <btBulletDynamicsCommon.h>
@@ -20,7 +21,6 @@
 #include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/ConvexPieces.h"
-#include "backends/rigid/RigidWorld.h"
 #include "core/Platen.h"
 
 // Mixing the float and double builds of Bullet corrupts memory silently.
@@ -95,16 +95,12 @@ Vec3 vec(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 btQuaternion bt(const Quat& q) { return {q.x, q.y, q.z, q.w}; }
 Quat quat(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
 
-// Bullet data shared by every grain of one Shape.
-struct ShapeEntry {
-  Shape::Ptr shape;
+// Bullet data shared by every grain of one Shape; the body lives in its principal frame.
+struct ShapeEntry : RigidShapeEntry {
   // A concave polyhedron's convex pieces (btCompoundShape children; declared before
   // `collision` so the compound goes first).
   std::vector<std::unique_ptr<btConvexHullShape>> pieces;
   std::unique_ptr<btCollisionShape> collision;
-  Quat principal;         // principal frame → shape frame
-  Vec3 centroid;          // shape frame (≈ 0 by Shape's invariant)
-  Vec3 moments;           // principal moments per unit density (SI, m⁵)
 };
 
 // Bullet's PGS solver with an early exit on Zhu & Zhao's measure of convergence (Zhu & Zhao
@@ -124,7 +120,7 @@ class ToleranceSolver : public btSequentialImpulseConstraintSolver {
   double deep_erp = 0;
 
   // Contact points deeper than deep_depth take deep_erp as their own β (Bullet's per-point
-  // ERP); with the split impulse on (see fix_scale) their correction adds no velocity.
+  // ERP); with the split impulse on (see scale_fixed) their correction adds no velocity.
   btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
                                         int numManifolds, btTypedConstraint** constraints, int numConstraints,
                                         const btContactSolverInfo& info, btIDebugDraw* debug) override {
@@ -422,17 +418,10 @@ struct BulletEngine::Impl final : RigidWorld {
 
   // ---------------------------------------------------------------- grains
   std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
-    return shapes.get(shape, [&] {
-      auto e = std::make_shared<ShapeEntry>();
-      e->shape = shape;
-      // Bullet keeps a diagonal inertia: the body lives in the principal frame.
-      const ShapeInertia in = shape_inertia(*shape, engine);
-      e->centroid = in.centroid;
-      e->moments = in.moments;
-      e->principal = in.principal;
+    return shapes.get(shape, engine, [&](ShapeEntry& e) {
       const double d = shape->equivalent_diameter();
       if (exact_sphere(*shape)) {
-        e->collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
+        e.collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
       } else if (auto pieces = convex_pieces(*shape); !pieces.empty()) {
         // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
         // concave in the engine) collides as convex pieces whose hulls cover it; a convex one
@@ -441,14 +430,13 @@ struct BulletEngine::Impl final : RigidWorld {
         btTransform identity;
         identity.setIdentity();
         for (const auto& piece : pieces) {
-          e->pieces.push_back(hull_shape(piece, d, *e));
-          compound->addChildShape(identity, e->pieces.back().get());
+          e.pieces.push_back(hull_shape(piece, d, e));
+          compound->addChildShape(identity, e.pieces.back().get());
         }
-        e->collision = std::move(compound);
+        e.collision = std::move(compound);
       } else {
-        e->collision = hull_shape(shape->convex_hull(), d, *e);
+        e.collision = hull_shape(shape->convex_hull(), d, e);
       }
-      return e;
     });
   }
 
@@ -700,46 +688,42 @@ struct BulletEngine::Impl final : RigidWorld {
 // ------------------------------------------------------------------ BulletEngine
 
 const OptionTable& bullet_options() {
-  static const OptionTable t = [] {
-    const BulletEngine::Options d;
-    OptionTable table{
-        rigid_option::sphere_representation("icosphere mesh (42 vertices, as Zhu & Zhao 2019)", "btSphereShape"),
-        rigid_option::length_scale("2 mm → 512"),
-        opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "", "collision margin / d (hulls are inset by it)"),
-        rigid_option::solver_iterations(
-            "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
-        opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
-                    "stop when impulses change by at most this fraction between iterations (0 = always run solver_iterations, as Zhu & Zhao 2019 §2.2)"),
-        opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
-        rigid_option::erp("penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
-        opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
-                    "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
-                    "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
-        opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
-        rigid_option::mass_scale("Zhu & Zhao 2019 §5 use 70"),
-    };
-    for (auto& spec : concave_shape_options("btCompoundShape")) table.push_back(std::move(spec));
-    return table;
-  }();
+  const BulletEngine::Options d;
+  static const OptionTable t = with_concave_shape_options(
+      {
+          rigid_option::sphere_representation("icosphere mesh (42 vertices, as Zhu & Zhao 2019)", "btSphereShape"),
+          rigid_option::length_scale("2 mm → 512"),
+          opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "",
+                              "collision margin / d (hulls are inset by it)"),
+          rigid_option::solver_iterations(
+              "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
+          opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
+                      "stop when impulses change by at most this fraction between iterations (0 = always run "
+                      "solver_iterations, as Zhu & Zhao 2019 §2.2)"),
+          opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
+          rigid_option::erp("penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
+          opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
+                      "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
+                      "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
+          opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
+          rigid_option::mass_scale("Zhu & Zhao 2019 §5 use 70"),
+      },
+      "btCompoundShape");
   return t;
 }
 
 BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
-  cfg.string("type", "bullet");
-  const crumble::Options r(cfg, bullet_options());
-  Options o;
-  read_rigid_options(r, o);
-  o.margin_fraction = r.number("margin_fraction");
-  o.solver_tolerance = r.number("solver_tolerance");
-  o.solver_residual = r.number("solver_residual");
-  o.deep_penetration = r.number("deep_penetration");
-  o.deep_erp = r.number("deep_erp");
-  return o;
+  return read_rigid_engine_options<Options>(cfg, "bullet", bullet_options(), [](const crumble::Options& r, Options& o) {
+    o.margin_fraction = r.number("margin_fraction");
+    o.solver_tolerance = r.number("solver_tolerance");
+    o.solver_residual = r.number("solver_residual");
+    o.deep_penetration = r.number("deep_penetration");
+    o.deep_erp = r.number("deep_erp");
+  });
 }
 
 BulletEngine::BulletEngine(const Options& opts, const EngineContext& ctx)
     : RigidEngine(std::make_unique<Impl>(opts, ctx)), impl_(static_cast<Impl*>(&world())) {}
-BulletEngine::~BulletEngine() = default;
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
 
@@ -756,16 +740,12 @@ Engine::SolverReport BulletEngine::solver_report() const {
 int BulletEngine::last_solver_iterations() const { return impl_->solver->max_iterations; }
 
 std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx) {
-  const auto opts = BulletEngine::read_options(cfg);
-  if (ctx.dimension != 3) cfg.fail("", "the bullet engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
-  return std::make_unique<BulletEngine>(opts, ctx);
+  return make_rigid_engine<BulletEngine>(cfg, ctx, "bullet");
 }
 
+// btScalar is double in this translation unit (the static_assert above); whether the linked
+// library is too is asked of the library itself.
 bool bullet_double_precision_ok(std::string* why) {
-  if (sizeof(btScalar) != sizeof(double)) {
-    if (why) *why = "btScalar is not double in crumble_bullet";
-    return false;
-  }
   // Ask the linked library: a sphere's AABB is computed inside libBulletCollision. With the
   // single-precision library linked against double headers the layout differs and the
   // value comes back wrong.

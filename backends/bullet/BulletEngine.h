@@ -57,10 +57,6 @@
 
 namespace crumble {
 
-// The options of the "engine" object (`crumble list --options bullet`).
-const OptionTable& bullet_options();
-std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx);
-
 class BulletEngine final : public RigidEngine {
  public:
   // The shared keys (backends/rigid/RigidOptions.h) and Bullet's own.
@@ -74,9 +70,7 @@ class BulletEngine final : public RigidEngine {
   static Options read_options(const Config& cfg);
 
   BulletEngine(const Options& opts, const EngineContext& ctx);
-  ~BulletEngine() override;
 
-  std::string name() const override { return "bullet"; }
   // On the Zhu & Zhao oedometer (docs/validation.md) a smaller step or more iterations did not
   // stop a fragment creeping into a neighbour; the deep-penetration correction did.
   std::string guard_advice() const override {
@@ -95,6 +89,10 @@ class BulletEngine final : public RigidEngine {
   struct Impl;
   Impl* impl_;  // owned by RigidEngine
 };
+
+// The options of the "engine" object (`crumble list --options bullet`).
+const OptionTable& bullet_options();
+std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx);
 
 // Checks that this build uses Bullet's double-precision libraries consistently: btScalar
 // is double in our translation units and the linked library computes in double. Returns

@@ -5,6 +5,7 @@
 // for a concave polyhedron a few convex pieces that cover it (one dConvex geom each on the
 // body; the near callback skips two pieces of one grain).
 #include "backends/ode/OdeEngine.h"
+#include "backends/rigid/RigidWorld.h"
 
 #include <ode/ode.h>
 
@@ -20,7 +21,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "backends/rigid/RigidWorld.h"
 #include "core/Platen.h"
 #include "base/Format.h"
 #include "geometry/SymmetricEigen.h"
@@ -133,11 +133,8 @@ void fill_convex(const TriMesh& hull, const Vec3& origin, double scale, ConvexDa
   out.plane_count = static_cast<unsigned>(faces.size());
 }
 
-// ODE data shared by every grain of one Shape.
-struct ShapeEntry {
-  Shape::Ptr shape;
-  Vec3 centroid;        // shape frame, SI
-  Mat3 inertia;         // about the centroid, per unit density, SI (m⁵)
+// ODE data shared by every grain of one Shape (its inertia about the centroid).
+struct ShapeEntry : RigidShapeEntry {
   bool sphere = false;  // exact dSphere
   double radius = 0;    // internal, exact sphere
   double size = 0;      // equivalent diameter, internal
@@ -249,9 +246,8 @@ std::vector<P2> clip_polygon(std::vector<P2> subject, const std::vector<P2>& cli
   return subject;
 }
 
-}  // namespace
-
-struct OdeEngine::Impl final : RigidWorld {
+struct OdeWorld final : RigidWorld {
+  using Options = OdeEngine::Options;
   Options opt;
 
   dWorldID world = nullptr;
@@ -272,7 +268,7 @@ struct OdeEngine::Impl final : RigidWorld {
   std::uint64_t step_count = 0;
   std::vector<PointRec> recs;
 
-  Impl(const Options& o, const EngineContext& c) : RigidWorld("ode", o, c), opt(o) {
+  OdeWorld(const Options& o, const EngineContext& c) : RigidWorld("ode", o, c), opt(o) {
     init_ode_for_this_thread();
     std::string why;
     if (!ode_double_precision_ok(&why)) throw std::runtime_error("ode: " + why);
@@ -290,7 +286,7 @@ struct OdeEngine::Impl final : RigidWorld {
     wall_tags.reserve(8);
   }
 
-  ~Impl() override {
+  ~OdeWorld() override {
     dJointGroupDestroy(contact_group);
     for (auto& [id, g] : grains) {
       for (dGeomID geom : g->geoms) dGeomDestroy(geom);
@@ -412,31 +408,25 @@ struct OdeEngine::Impl final : RigidWorld {
 
   // ---------------------------------------------------------------- grains
   std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
-    return shapes.get(shape, [&] {
-      auto e = std::make_shared<ShapeEntry>();
-      e->shape = shape;
-      const ShapeInertia in = shape_inertia(*shape, engine);
-      e->centroid = in.centroid;
-      e->inertia = in.inertia;
-      e->size = shape->equivalent_diameter() * scale;
+    return shapes.get(shape, engine, [&](ShapeEntry& e) {
+      e.size = shape->equivalent_diameter() * scale;
       if (exact_sphere(*shape)) {
-        e->sphere = true;
-        e->radius = shape->parameters().at(0) * scale;
+        e.sphere = true;
+        e.radius = shape->parameters().at(0) * scale;
       } else if (auto pieces = convex_pieces(*shape); !pieces.empty()) {
         // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
         // concave in the engine) collides as convex pieces whose hulls cover it, as in bullet;
         // a convex one (within concavity_tolerance of its hull) as its hull, as below.
-        e->pieces.resize(pieces.size());
+        e.pieces.resize(pieces.size());
         for (std::size_t k = 0; k < pieces.size(); ++k) {
           const Vec3 c = polyhedron_mass_properties(pieces[k]).centroid;
-          fill_convex(pieces[k], c, scale, e->pieces[k]);
-          e->piece_offsets.push_back((c - e->centroid) * scale);
+          fill_convex(pieces[k], c, scale, e.pieces[k]);
+          e.piece_offsets.push_back((c - e.centroid) * scale);
         }
       } else {
-        fill_convex(shape->convex_hull(), e->centroid, scale, e->convex);
+        fill_convex(shape->convex_hull(), e.centroid, scale, e.convex);
         note_concave_hull(*shape);
       }
-      return e;
     });
   }
 
@@ -635,7 +625,7 @@ struct OdeEngine::Impl final : RigidWorld {
     return count >= 2 ? count : 0;
   }
 
-  static void near_callback(void* data, dGeomID o1, dGeomID o2) { static_cast<Impl*>(data)->near(o1, o2); }
+  static void near_callback(void* data, dGeomID o1, dGeomID o2) { static_cast<OdeWorld*>(data)->near(o1, o2); }
 
   void near(dGeomID o1, dGeomID o2) {
     const auto* t1 = static_cast<const GeomTag*>(dGeomGetData(o1));
@@ -702,7 +692,7 @@ struct OdeEngine::Impl final : RigidWorld {
       dBodySetPosition(platen_body, p[0], p[1], platen_centre_z());
       dBodySetLinearVel(platen_body, 0, 0, driver.command().value * scale);
     }
-    dSpaceCollide(space, this, &Impl::near_callback);
+    dSpaceCollide(space, this, &OdeWorld::near_callback);
     for (auto& r : recs) {
       dJointID j = dJointCreateContact(world, contact_group, &r.contact);
       dBodyID b1 = dGeomGetBody(r.contact.geom.g1), b2 = dGeomGetBody(r.contact.geom.g2);
@@ -797,60 +787,51 @@ struct OdeEngine::Impl final : RigidWorld {
   }
 };
 
+}  // namespace
+
 // ------------------------------------------------------------------ OdeEngine
 
 const OptionTable& ode_options() {
-  static const OptionTable t = [] {
-    const double inf = std::numeric_limits<double>::infinity();
-    const OdeEngine::Options d;
-    OptionTable table{
-        rigid_option::sphere_representation("icosphere hull (dConvex)", "dSphere"),
-        rigid_option::length_scale("ODE's and libccd's tolerances are absolute"),
-        rigid_option::solver_iterations("QuickStep SOR iterations per step"),
-        opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
-        rigid_option::erp("contact error reduction (penetration corrected per step); ODE's default 0.2 launches "
-                          "grains at Δt ≈ 5e-5 s"),
-        opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
-        opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
-                    "cap on the velocity that pushes overlapping grains apart; 0 = none"),
-        opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
-                     "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
-                     "this many from the clipped touching faces (1 = libccd's point only)"),
-        rigid_option::mass_scale("mass scaling"),
-    };
-    for (auto& spec : concave_shape_options("one dConvex geom each on the grain's body")) table.push_back(std::move(spec));
-    return table;
-  }();
+  const double inf = std::numeric_limits<double>::infinity();
+  const OdeEngine::Options d;
+  static const OptionTable t = with_concave_shape_options(
+      {
+          rigid_option::sphere_representation("icosphere hull (dConvex)", "dSphere"),
+          rigid_option::length_scale("ODE's and libccd's tolerances are absolute"),
+          rigid_option::solver_iterations("QuickStep SOR iterations per step"),
+          opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
+          rigid_option::erp("contact error reduction (penetration corrected per step); ODE's default 0.2 launches "
+                            "grains at Δt ≈ 5e-5 s"),
+          opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
+          opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
+                      "cap on the velocity that pushes overlapping grains apart; 0 = none"),
+          opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
+                       "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
+                       "this many from the clipped touching faces (1 = libccd's point only)"),
+          rigid_option::mass_scale("mass scaling"),
+      },
+      "one dConvex geom each on the grain's body");
   return t;
 }
 
 OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
-  cfg.string("type", "ode");
-  const crumble::Options r(cfg, ode_options());
-  Options o;
-  read_rigid_options(r, o);
-  o.sor_w = r.number("sor_w");
-  o.cfm = r.number("cfm");
-  o.max_correcting_velocity = r.number("max_correcting_velocity");
-  o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
-  return o;
+  return read_rigid_engine_options<Options>(cfg, "ode", ode_options(), [](const crumble::Options& r, Options& o) {
+    o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
+    o.sor_w = r.number("sor_w");
+    o.cfm = r.number("cfm");
+    o.max_correcting_velocity = r.number("max_correcting_velocity");
+  });
 }
 
-OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx)
-    : RigidEngine(std::make_unique<Impl>(opts, ctx)), impl_(static_cast<Impl*>(&world())) {}
-OdeEngine::~OdeEngine() = default;
+OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : RigidEngine(std::make_unique<OdeWorld>(opts, ctx)) {}
 
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx) {
-  const auto opts = OdeEngine::read_options(cfg);
-  if (ctx.dimension != 3) cfg.fail("", "the ode engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
-  return std::make_unique<OdeEngine>(opts, ctx);
+  return make_rigid_engine<OdeEngine>(cfg, ctx, "ode");
 }
 
+// dReal is double in this translation unit (the static_assert above); whether the linked
+// libode is too is asked of the library itself.
 bool ode_double_precision_ok(std::string* why) {
-  if (sizeof(dReal) != sizeof(double)) {
-    if (why) *why = "dReal is not double in crumble_ode";
-    return false;
-  }
   init_ode_for_this_thread();
   if (!dCheckConfiguration("ODE_double_precision")) {
     if (why) *why = "the linked libode is not the double-precision build";

@@ -64,24 +64,18 @@ class OdeEngine final : public RigidEngine {
  public:
   // The shared keys (backends/rigid/RigidOptions.h) and ODE's own.
   struct Options : RigidOptions {
-    double sor_w = 1.0;
+    int contacts_per_pair = 4;  // collision: points per pair of polyhedra
+    double sor_w = 1.0;         // QuickStep: over-relaxation, regularisation, correction cap
     double cfm = 1e-9;
     double max_correcting_velocity = 0;
-    int contacts_per_pair = 4;
   };
   static Options read_options(const Config& cfg);
 
   OdeEngine(const Options& opts, const EngineContext& ctx);
-  ~OdeEngine() override;
 
-  std::string name() const override { return "ode"; }
   std::string guard_advice() const override {
     return "Reduce the time step (time_step), raise engine.solver_iterations, or lower loading.max_stress.";
   }
-
- private:
-  struct Impl;
-  Impl* impl_;  // owned by RigidEngine
 };
 
 // True when dReal is double here and the linked libode was built in double precision.

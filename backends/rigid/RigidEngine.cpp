@@ -7,6 +7,8 @@ namespace crumble {
 RigidEngine::RigidEngine(std::unique_ptr<RigidWorld> world) : world_(std::move(world)) {}
 RigidEngine::~RigidEngine() = default;
 
+std::string RigidEngine::name() const { return world_->engine_name(); }
+
 void RigidEngine::set_container(const Container& c) { world_->set_container(c); }
 void RigidEngine::add_grain(const Grain& g) { world_->add_grain(g); }
 bool RigidEngine::set_friction_scale(double scale) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Config.h"
 #include "core/Engine.h"
 
 namespace crumble {
@@ -19,6 +20,7 @@ class RigidEngine : public Engine {
  public:
   ~RigidEngine() override;
 
+  std::string name() const override;  // the world's engine name
   void set_container(const Container& c) override;
   void add_grain(const Grain& g) override;
   // Any scale in [0, 1]; false otherwise.
@@ -44,5 +46,15 @@ class RigidEngine : public Engine {
  private:
   std::unique_ptr<RigidWorld> world_;
 };
+
+// The adapter E (BulletEngine, OdeEngine) of an "engine" object of type `type`: its
+// options read (E::read_options), refused for a 2D scenario.
+template <class E>
+std::unique_ptr<Engine> make_rigid_engine(const Config& cfg, const EngineContext& ctx, const std::string& type) {
+  const auto opts = E::read_options(cfg);
+  if (ctx.dimension != 3)
+    cfg.fail("", "the " + type + " engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
+  return std::make_unique<E>(opts, ctx);
+}
 
 }  // namespace crumble

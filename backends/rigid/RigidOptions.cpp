@@ -28,6 +28,11 @@ OptionSpec mass_scale(const std::string& note) {
 
 namespace crumble {
 
+OptionTable with_concave_shape_options(OptionTable table, const std::string& how) {
+  for (auto& spec : concave_shape_options(how)) table.push_back(std::move(spec));
+  return table;
+}
+
 void read_rigid_options(const Options& r, RigidOptions& o) {
   o.exact_spheres = r.string("sphere_representation") == "sphere";
   o.length_scale = r.number("length_scale");

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/ConcaveShapes.h"
+#include "core/Config.h"
 #include "core/Options.h"
 
 namespace crumble {
@@ -30,7 +31,23 @@ OptionSpec erp(const std::string& doc);
 OptionSpec mass_scale(const std::string& note);
 }  // namespace rigid_option
 
+// An adapter's table: its lines, then the three concave-shape lines (`how` names its compound).
+OptionTable with_concave_shape_options(OptionTable table, const std::string& how);
+
 // Reads the shared keys (the table must hold every line above and the concave-shape ones).
 void read_rigid_options(const Options& r, RigidOptions& o);
+
+// An adapter's options from its "engine" object: the type checked, the shared keys read,
+// then `read_own(r, o)` reads the adapter's own.
+template <class EngineOptions, class ReadOwn>
+EngineOptions read_rigid_engine_options(const Config& cfg, const std::string& type, const OptionTable& table,
+                                        ReadOwn read_own) {
+  cfg.string("type", type);
+  const Options r(cfg, table);
+  EngineOptions o;
+  read_rigid_options(r, o);
+  read_own(r, o);
+  return o;
+}
 
 }  // namespace crumble

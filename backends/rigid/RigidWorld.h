@@ -30,8 +30,10 @@ struct BodyMotion {
   Vec3 com, velocity, angular_velocity;
 };
 
-// A shape's mass properties as a rigid body takes them; throws std::invalid_argument naming
-// `engine` for a shape without volume or with a non-positive principal moment.
+// A shape's mass properties as a rigid body takes them (Bullet keeps a diagonal inertia, so
+// its bodies live in the principal frame; ODE takes the full tensor); throws
+// std::invalid_argument naming `engine` for a shape without volume or with a non-positive
+// principal moment.
 struct ShapeInertia {
   Vec3 centroid;   // shape frame, SI
   Mat3 inertia;    // about the centroid, per unit density, SI (m⁵)
@@ -40,19 +42,29 @@ struct ShapeInertia {
 };
 ShapeInertia shape_inertia(const Shape& shape, const std::string& engine);
 
-// The library data shared by every grain of one Shape, built once per shape and dropped
-// with its last grain.
+// What an adapter's per-shape entry starts from: the shape and its mass properties.
+struct RigidShapeEntry : ShapeInertia {
+  Shape::Ptr shape;
+};
+
+// The library data shared by every grain of one Shape (an Entry derived from
+// RigidShapeEntry), built once per shape and dropped with its last grain.
 template <class Entry>
 class ShapeCache {
  public:
+  // The cached entry of `shape`, or a new one holding the shape and its inertia that
+  // `build(entry)` completes with the library's data.
   template <class Build>
-  std::shared_ptr<Entry> get(const Shape::Ptr& shape, Build build) {
+  std::shared_ptr<Entry> get(const Shape::Ptr& shape, const std::string& engine, Build build) {
     auto it = map_.find(shape.get());
     if (it != map_.end())
       if (auto e = it->second.lock()) return e;
     // Drop stale entries now and then so the cache does not grow with fragments.
     for (auto i = map_.begin(); i != map_.end();) i = i->second.expired() ? map_.erase(i) : std::next(i);
-    std::shared_ptr<Entry> e = build();
+    auto e = std::make_shared<Entry>();
+    e->shape = shape;
+    static_cast<ShapeInertia&>(*e) = shape_inertia(*shape, engine);
+    build(*e);
     map_[shape.get()] = e;
     return e;
   }
@@ -90,6 +102,7 @@ class RigidWorld {
   void set_friction_scale(double s);
   void read_state(std::span<Grain> grains) const;
   double length_scale() const { return scale; }
+  const std::string& engine_name() const { return engine; }
   // "compound_shapes", "compound_pieces", "compound_failures": concave polyhedral shapes
   // collided as convex pieces, their pieces, and the shapes that could not be cut.
   virtual std::map<std::string, double> summary_figures() const;
