@@ -18,7 +18,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/ConvexPieces.h"
 #include "core/Platen.h"

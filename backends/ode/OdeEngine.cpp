@@ -23,7 +23,6 @@
 
 #include "core/Platen.h"
 #include "base/Format.h"
-#include "geometry/SymmetricEigen.h"
 
 // ode/precision.h picks dDOUBLE unless dIDESINGLE is set; the build states dIDEDOUBLE and
 // configure checks that ode.pc was built with dDOUBLE.
