@@ -9,9 +9,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <cstdlib>
-#include <fstream>
 #include <cmath>
 #include <limits>
 #include <map>
