@@ -2,7 +2,9 @@
 // distance tolerance, without facet merging. Coplanar neighbours stay separate triangles;
 // points on or within the tolerance of the hull are never vertices, and a final pass drops
 // hull vertices that are not extreme (a point in the middle of a face or an edge that was
-// picked before the corners around it) and rebuilds from the extreme points only.
+// picked before the corners around it) and rebuilds from the extreme points only. When no
+// tolerance gives a convex hull holding every point, the same quickhull decides visibility
+// by the exact sign of the orientation determinant (Shewchuk 1997) instead.
 #include "geometry/ConvexHull.h"
 #include "geometry/BuildCounters.h"
 #include "geometry/Format.h"
