@@ -427,8 +427,8 @@ void Simulation::note_analysis_failure(const Grain& g, const std::string& error)
   while (!word.empty() && word.back() == '_') word.pop_back();
   if (word.empty()) word = "other";
   if (analysis_failures_.empty())
-    std::cerr << "crumble: warning: the breakage analysis of grain " << g.id << " (" << g.shape->describe()
-              << ") failed: " << error
+    std::cerr << "crumble: warning: the breakage analysis or fragment build of grain " << g.id << " ("
+              << g.shape->describe() << ") failed: " << error
               << "; the grain stays intact and the run goes on (failures counted in summary.json: analyses_failed)\n";
   ++analysis_failures_[word];
 }
@@ -497,7 +497,6 @@ void Simulation::check_breakage(const RunState& st) {
   }
   timings_.analyses += seconds_since(t0);
   t0 = Clock::now();
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (long k = 0; k < n; ++k) {
     if (!errors[k].empty() || !results[k].broken || !results[k].fracture) continue;
     if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
