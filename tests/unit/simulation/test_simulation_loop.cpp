@@ -295,18 +295,23 @@ struct Lineage {
   long events = 0;
 };
 
+// `count` 1 mm spheres on the x axis, `spacing` apart.
+void add_spheres(Simulation& sim, int count, double spacing) {
+  for (int i = 0; i < count; ++i) {
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    g.position = {spacing * i, 0, 0};
+    sim.add_grain(g);
+  }
+}
+
 Lineage run_lineage(std::unique_ptr<FragmentBuilder> builder, double child_factor) {
   EngineContext ctx;
   const SqueezeSetup u = squeeze_setup();
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(0, child_factor),
                  std::move(builder), ctx, u.ss, u.ls, u.sch, u.scr, 7);
   sim.set_container({0.01, 0.01, 0.01, 0});
-  for (int i = 0; i < 4; ++i) {
-    Grain g;
-    g.shape = Shape::sphere(1e-3);
-    g.position = {2e-3 * i, 0, 0};
-    sim.add_grain(g);
-  }
+  add_spheres(sim, 4, 2e-3);
   Lineage r;
   struct Rec : Observer {
     Lineage* r;
@@ -524,12 +529,7 @@ TEST(SimulationLoop, AFailedAnalysisLeavesTheGrainIntactAndIsCounted) {
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<FailsOnGrain2>(),
                  std::make_unique<FailsThreeTimes>(), ctx, u.ss, u.ls, u.sch, u.scr, 123);
   sim.set_container({0.01, 0.01, 0.01, 0});
-  for (int i = 0; i < 8; ++i) {
-    Grain g;
-    g.shape = Shape::sphere(1e-3);
-    g.position = {1e-3 * i, 0, 0};
-    sim.add_grain(g);
-  }
+  add_spheres(sim, 8, 1e-3);
   struct Rec : Observer {
     long failed = 0;
     void on_analysis(const Simulation&, const AnalysisRecord& a) override { failed += a.analysis.outcome == "failed"; }
