@@ -1,6 +1,7 @@
 #include "core/Simulation.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -376,6 +377,12 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
+  long failed = 0;
+  for (const auto& [word, count] : analysis_failures_) {
+    sum.extra["analyses_failed_" + word] = static_cast<double>(count);
+    failed += count;
+  }
+  sum.extra["analyses_failed"] = static_cast<double>(failed);
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
@@ -402,6 +409,26 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.timings = timings_;
   sum.wall_seconds = seconds_since(t_start);
   return sum;
+}
+
+// Counted by the error's leading word (the text before its first ':', e.g. "convex_hull"),
+// written to summary.json as analyses_failed and analyses_failed_<word>; the first one is
+// told on stderr.
+void Simulation::note_analysis_failure(const Grain& g, const std::string& error) {
+  std::string word;
+  for (const char c : error.substr(0, error.find(':'))) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (keep) word += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!word.empty() && word.back() != '_') word += '_';
+    if (word.size() >= 40) break;
+  }
+  while (!word.empty() && word.back() == '_') word.pop_back();
+  if (word.empty()) word = "other";
+  if (analysis_failures_.empty())
+    std::cerr << "crumble: warning: the breakage analysis or fragment build of grain " << g.id << " ("
+              << g.shape->describe() << ") failed: " << error
+              << "; the grain stays intact and the run goes on (failures counted in summary.json: analyses_failed)\n";
+  ++analysis_failures_[word];
 }
 
 void Simulation::check_breakage(const RunState& st) {
@@ -468,22 +495,19 @@ void Simulation::check_breakage(const RunState& st) {
   }
   timings_.analyses += seconds_since(t0);
   t0 = Clock::now();
+  for (long k = 0; k < n; ++k) {
+    if (!errors[k].empty() || !results[k].broken || !results[k].fracture) continue;
+    if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
+  }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (long k = 0; k < n; ++k) {
     if (!errors[k].empty() || !results[k].broken || !results[k].fracture) continue;
     try {
-      if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
       frags[k] = builder_->build(*grains_[candidates[k]].shape, *results[k].fracture);
     } catch (const std::exception& e) {
       errors[k] = e.what();
     }
   }
-  for (long k = 0; k < n; ++k)
-    if (!errors[k].empty()) {
-      const Grain& g = grains_[candidates[k]];
-      throw std::runtime_error("breakage analysis failed for grain " + std::to_string(g.id) + " (" +
-                               g.shape->describe() + "): " + errors[k]);
-    }
   timings_.fragments += seconds_since(t0);
 
   t0 = Clock::now();
@@ -495,6 +519,15 @@ void Simulation::check_breakage(const RunState& st) {
     AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
                        results[k]};
     rec.analysis.fracture.reset();
+    if (!errors[k].empty()) {
+      // An analysis or a fragment build that threw (a degenerate geometry) leaves the grain
+      // as it was, before anything of it changed: the mass budget holds, and the run goes on.
+      rec.analysis.broken = false;
+      rec.analysis.outcome = "failed";
+      for (auto& o : observers_) o->on_analysis(*this, rec);
+      note_analysis_failure(parent, errors[k]);
+      continue;
+    }
     // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
     // The record says what the builder made of it: "no_split" when the model broke the
     // grain but the builder returned fewer than two pieces (the grain stays as it is),

@@ -3,6 +3,7 @@
 #pragma once
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <span>
 #include <vector>
@@ -140,6 +141,7 @@ class Simulation {
   double area() const;
   double time_step(double stress) const;
   void check_breakage(const RunState& st);
+  void note_analysis_failure(const Grain& g, const std::string& error);
   void drive_walls(double t, double dt);  // set every moving wall for the step [t, t + dt]
   void update_open_scene();               // discharge product, feed the next rock
   void finish_open_scene(RunSummary& sum) const;
@@ -165,6 +167,7 @@ class Simulation {
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;
+  std::map<std::string, long> analysis_failures_;  // analyses that threw, by the error's leading word
   ScreeningCounts screened_;
   Timings timings_;
   bool resumed_ = false;
