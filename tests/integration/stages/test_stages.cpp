@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "output/Writers.h"
 #include "run/RunPipeline.h"
 #include "output/Writers.h"
 #include "tools/Stages.h"
