@@ -3,9 +3,11 @@
 // values (Grain::strength), its screening and schedule defaults, and the figures it
 // reports for each analysis.
 #pragma once
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -95,5 +97,39 @@ class BreakageModel {
   virtual std::string load_measure_name() const { return {}; }
   virtual double load_measure(const Grain&, const Material&, std::span<const Contact>) const { return 0; }
 };
+
+// A contact's point (from the grain's centroid) and force, in the grain's body frame.
+struct BodyLoad {
+  Vec3 point, force;
+};
+
+// The contacts on g in its body frame, those without force left out. Throws
+// std::invalid_argument, the message led by "MODEL: ", when g's pose or a contact's point
+// or force is not finite.
+inline std::vector<BodyLoad> body_frame_loads(const Grain& g, std::span<const Contact> contacts,
+                                              const std::string& model) {
+  auto require = [&](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument(model + ": " + what);
+  };
+  std::vector<BodyLoad> loads;
+  const Quat& q = g.orientation;
+  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  require(std::isfinite(qn) && qn > 0 && is_finite(g.position), "grain " + std::to_string(g.id) + " has a non-finite pose");
+  const Quat to_body = q.normalized().conjugate();  // body ← world
+  for (const auto& c : contacts) {
+    require(is_finite(c.point) && is_finite(c.force), "non-finite contact point or force on grain " + std::to_string(g.id));
+    if (norm2(c.force) == 0) continue;
+    loads.push_back({to_body.rotate(c.point - g.position), to_body.rotate(c.force)});
+  }
+  return loads;
+}
+
+// The index of the largest force among `loads` (the first of equals; 0 when there is none).
+inline std::size_t largest_load(const std::vector<BodyLoad>& loads) {
+  std::size_t largest = 0;
+  for (std::size_t k = 1; k < loads.size(); ++k)
+    if (norm2(loads[k].force) > norm2(loads[largest].force)) largest = k;
+  return largest;
+}
 
 }  // namespace crumble

@@ -1,6 +1,7 @@
 #include "core/Simulation.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -247,32 +248,7 @@ RunSummary Simulation::run(const Progress& progress) {
   const auto t_start = Clock::now();
   if (container_.height <= 0) throw std::logic_error("Simulation::run: no container set");
   RunSummary sum;
-  RunState st;
-  if (resumed_) {
-    sum.grains_initial = resumed_from_.grains_initial;
-    sum.mass_initial = resumed_from_.mass_initial;
-    sum.void_ratio_initial = resumed_from_.void_ratio_initial;
-    st = state();
-  } else {
-    sum.grains_initial = grains_.size();
-    for (const auto& g : grains_) sum.mass_initial += g.mass(ctx_.materials[g.material].density);
-    initial_height_ = engine_->platen_position();
-    st = state();
-    sum.void_ratio_initial = st.void_ratio;
-  }
-  initial_grains_ = sum.grains_initial;
-  initial_mass_ = sum.mass_initial;
-  initial_void_ratio_ = sum.void_ratio_initial;
-  sum.max_platen_stress = max_platen_stress_;
-  for (auto& o : observers_) o->on_start(*this, st);
-
-  dt_ = time_step(0);
-  {
-    const double bound = engine_->max_stable_dt();
-    if (dt_ > bound && !settings_.auto_reduce_dt)
-      throw std::invalid_argument("time step " + std::to_string(dt_) + " s exceeds the engine's stable step " +
-                                  std::to_string(bound) + " s (set simulation.auto_reduce_dt or a smaller dt)");
-  }
+  RunState st = start_run(sum);
   auto last_progress = Clock::now();
   update_open_scene();
   const Timings before_loop = timings_;
@@ -284,49 +260,8 @@ RunSummary Simulation::run(const Progress& progress) {
       sum.interrupted = true;
       break;
     }
-    // The first step after a resume: the stress at the checkpoint, which an engine that does
-    // not keep its contact forces (Bullet) cannot measure yet.
-    const bool first_resumed = resumed_ && step_ == resumed_from_.step && resumed_from_.platen_stress >= 0;
-    double dt = time_step(std::max(first_resumed ? resumed_from_.platen_stress : st.platen_stress, 0.0));
-    const double bound = engine_->max_stable_dt();
-    if (dt > bound) {
-      if (!settings_.auto_reduce_dt)
-        throw std::runtime_error("time step exceeds the engine's stable step after breakage");
-      if (dt_reductions_ == 0 || dt_ != bound)
-        std::cerr << "crumble: warning: time step " << dt << " s reduced to the engine's stable step " << bound
-                  << " s at t = " << time_ << " s\n";
-      dt = bound;
-      ++dt_reductions_;
-    }
-    dt_ = dt;
-    engine_->set_platen(loading_.command(time_, area(), initial_height_));
-    auto t0 = Clock::now();
-    const double z_before = st.platen_height;
-    drive_walls(time_, dt);
-    engine_->step(dt);
-    timings_.engine += seconds_since(t0);
-    if (const Engine::SolverReport r = engine_->solver_report(); r.iterations >= 0) {
-      ++solver_.steps;
-      solver_.iterations_max = std::max(solver_.iterations_max, r.iterations);
-      if (r.limit_before_tolerance) {
-        ++solver_.limited;
-        solver_.limited_change_max = std::max(solver_.limited_change_max, r.change);
-      }
-    }
-    time_ += dt;
-    ++step_;
-    st = state();
-    account_platen_work(st.platen_force, st.platen_height - z_before);
-    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
-      t0 = Clock::now();
-      update_open_scene();
-      check_guards("loading", dt, true);
-      timings_.guards += seconds_since(t0);
-    } else {
-      GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->guard_advice(), 0};
-      at.open = container_.open;
-      check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
-    }
+    const double dt = next_time_step(st);
+    step_once(dt, st);
     sum.max_platen_stress = max_platen_stress_ = std::max(sum.max_platen_stress, st.platen_stress);
     // A stress ramp schedules by the stress it commands (Zhu & Zhao 2019 §5: a check every
     // 0.08 MPa of loading). The measured stress of an explicit engine rings: scheduled
@@ -338,7 +273,7 @@ RunSummary Simulation::run(const Progress& progress) {
       st = state();
     }
     if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
-      t0 = Clock::now();
+      const auto t0 = Clock::now();
       for (auto& o : observers_) o->on_sample(*this, st);
       timings_.observers += seconds_since(t0);
     }
@@ -365,6 +300,98 @@ RunSummary Simulation::run(const Progress& progress) {
   st = state();
   for (auto& o : observers_) o->on_sample(*this, st);
   sync_grains();
+  fill_summary(sum, st);
+  auto t0 = Clock::now();
+  for (auto& o : observers_) o->on_finish(*this, st, sum);
+  timings_.observers += seconds_since(t0);
+  sum.timings = timings_;
+  sum.wall_seconds = seconds_since(t_start);
+  return sum;
+}
+
+// The initial figures (those of the checkpoint on a resume), the observers started, and the
+// first time step checked against the engine's stable step.
+RunState Simulation::start_run(RunSummary& sum) {
+  RunState st;
+  if (resumed_) {
+    sum.grains_initial = resumed_from_.grains_initial;
+    sum.mass_initial = resumed_from_.mass_initial;
+    sum.void_ratio_initial = resumed_from_.void_ratio_initial;
+    st = state();
+  } else {
+    sum.grains_initial = grains_.size();
+    for (const auto& g : grains_) sum.mass_initial += g.mass(ctx_.materials[g.material].density);
+    initial_height_ = engine_->platen_position();
+    st = state();
+    sum.void_ratio_initial = st.void_ratio;
+  }
+  initial_grains_ = sum.grains_initial;
+  initial_mass_ = sum.mass_initial;
+  initial_void_ratio_ = sum.void_ratio_initial;
+  sum.max_platen_stress = max_platen_stress_;
+  for (auto& o : observers_) o->on_start(*this, st);
+
+  dt_ = time_step(0);
+  const double bound = engine_->max_stable_dt();
+  if (dt_ > bound && !settings_.auto_reduce_dt)
+    throw std::invalid_argument("time step " + std::to_string(dt_) + " s exceeds the engine's stable step " +
+                                std::to_string(bound) + " s (set simulation.auto_reduce_dt or a smaller dt)");
+  return st;
+}
+
+// The step for the stress reached, reduced to the engine's stable step when it allows that.
+double Simulation::next_time_step(const RunState& st) {
+  // The first step after a resume: the stress at the checkpoint, which an engine that does
+  // not keep its contact forces (Bullet) cannot measure yet.
+  const bool first_resumed = resumed_ && step_ == resumed_from_.step && resumed_from_.platen_stress >= 0;
+  double dt = time_step(std::max(first_resumed ? resumed_from_.platen_stress : st.platen_stress, 0.0));
+  const double bound = engine_->max_stable_dt();
+  if (dt > bound) {
+    if (!settings_.auto_reduce_dt) throw std::runtime_error("time step exceeds the engine's stable step after breakage");
+    if (dt_reductions_ == 0 || dt_ != bound)
+      std::cerr << "crumble: warning: time step " << dt << " s reduced to the engine's stable step " << bound
+                << " s at t = " << time_ << " s\n";
+    dt = bound;
+    ++dt_reductions_;
+  }
+  dt_ = dt;
+  return dt;
+}
+
+// One engine step under the loading's platen command and the walls' motion, then the guards.
+void Simulation::step_once(double dt, RunState& st) {
+  engine_->set_platen(loading_.command(time_, area(), initial_height_));
+  auto t0 = Clock::now();
+  const double z_before = st.platen_height;
+  drive_walls(time_, dt);
+  engine_->step(dt);
+  timings_.engine += seconds_since(t0);
+  if (const Engine::SolverReport r = engine_->solver_report(); r.iterations >= 0) {
+    ++solver_.steps;
+    solver_.iterations_max = std::max(solver_.iterations_max, r.iterations);
+    if (r.limit_before_tolerance) {
+      ++solver_.limited;
+      solver_.limited_change_max = std::max(solver_.limited_change_max, r.change);
+    }
+  }
+  time_ += dt;
+  ++step_;
+  st = state();
+  account_platen_work(st.platen_force, st.platen_height - z_before);
+  if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
+    t0 = Clock::now();
+    update_open_scene();
+    check_guards("loading", dt, true);
+    timings_.guards += seconds_since(t0);
+  } else {
+    GuardContext at{"loading", step_, time_, st.platen_stress, dt, engine_->guard_advice(), 0};
+    at.open = container_.open;
+    check_scalar_invariants(settings_.guards, at, st.platen_height, st.void_ratio, st.platen_force);
+  }
+}
+
+// The run's counts and final figures in summary.json (before the observers add theirs).
+void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.steps = step_;
   sum.time = time_;
   sum.grains_final = grains_.size();
@@ -376,6 +403,12 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
+  long failed = 0;
+  for (const auto& [word, count] : analysis_failures_) {
+    sum.extra["analyses_failed_" + word] = static_cast<double>(count);
+    failed += count;
+  }
+  sum.extra["analyses_failed"] = static_cast<double>(failed);
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
@@ -383,79 +416,117 @@ RunSummary Simulation::run(const Progress& progress) {
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
   sum.extra["guard_small_grains_removed"] = static_cast<double>(guard_max_.small_grains_removed);
   for (const auto& [key, value] : engine_->summary_figures()) sum.extra["engine_" + key] = value;
-  if (solver_.steps > 0) {
-    const double limited = static_cast<double>(solver_.limited) / static_cast<double>(solver_.steps);
-    sum.extra["engine_solver_iterations_max"] = solver_.iterations_max;
-    sum.extra["engine_solver_limited_fraction"] = limited;
-    sum.extra["engine_solver_limited_change_max"] = solver_.limited_change_max;
-    // Unconverged contact forces change the result (docs/validation.md, Zhu & Zhao §5): say so.
-    if (limited >= 0.1)
-      std::cerr << "crumble: note: the contact solver stopped at its iteration limit (" << solver_.iterations_max
-                << ") before its tolerance in " << std::lround(100 * limited)
-                << " % of the loading steps (relative impulse change left: up to " << solver_.limited_change_max
-                << "); its contact forces are less converged than engine.solver_tolerance asks: raise engine.solver_iterations for converged forces (counted in "
-                   "summary.json: engine_solver_limited_fraction)\n";
+  summarise_solver(sum);
+}
+
+void Simulation::summarise_solver(RunSummary& sum) const {
+  if (solver_.steps <= 0) return;
+  const double limited = static_cast<double>(solver_.limited) / static_cast<double>(solver_.steps);
+  sum.extra["engine_solver_iterations_max"] = solver_.iterations_max;
+  sum.extra["engine_solver_limited_fraction"] = limited;
+  sum.extra["engine_solver_limited_change_max"] = solver_.limited_change_max;
+  // Unconverged contact forces change the result (docs/validation.md, Zhu & Zhao §5): say so.
+  if (limited >= 0.1)
+    std::cerr << "crumble: note: the contact solver stopped at its iteration limit (" << solver_.iterations_max
+              << ") before its tolerance in " << std::lround(100 * limited)
+              << " % of the loading steps (relative impulse change left: up to " << solver_.limited_change_max
+              << "); its contact forces are less converged than engine.solver_tolerance asks: raise engine.solver_iterations for converged forces (counted in "
+                 "summary.json: engine_solver_limited_fraction)\n";
+}
+
+// Counted by the error's leading word (the text before its first ':', e.g. "convex_hull"),
+// written to summary.json as analyses_failed and analyses_failed_<word>; the first one is
+// told on stderr.
+void Simulation::note_analysis_failure(const Grain& g, const std::string& error) {
+  std::string word;
+  for (const char c : error.substr(0, error.find(':'))) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (keep) word += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!word.empty() && word.back() != '_') word += '_';
+    if (word.size() >= 40) break;
   }
-  auto t0 = Clock::now();
-  for (auto& o : observers_) o->on_finish(*this, st, sum);
-  timings_.observers += seconds_since(t0);
-  sum.timings = timings_;
-  sum.wall_seconds = seconds_since(t_start);
-  return sum;
+  while (!word.empty() && word.back() == '_') word.pop_back();
+  if (word.empty()) word = "other";
+  if (analysis_failures_.empty())
+    std::cerr << "crumble: warning: the breakage analysis or fragment build of grain " << g.id << " ("
+              << g.shape->describe() << ") failed: " << error
+              << "; the grain stays intact and the run goes on (failures counted in summary.json: analyses_failed)\n";
+  ++analysis_failures_[word];
 }
 
 void Simulation::check_breakage(const RunState& st) {
+  BreakageBatch b = select_candidates();
+  if (b.candidates.empty()) return;
+  run_analyses(b);
+  build_fragments(b);
+  const auto t0 = Clock::now();
+  std::vector<char> remove(grains_.size(), 0);
+  std::vector<Grain> added;
+  for (long k = 0; k < static_cast<long>(b.candidates.size()); ++k)
+    if (apply_outcome(b, k, st, added)) remove[b.candidates[k]] = 1;
+  std::vector<Grain> kept;
+  kept.reserve(grains_.size() + added.size());
+  for (std::size_t i = 0; i < grains_.size(); ++i)
+    if (!remove[i]) kept.push_back(std::move(grains_[i]));
+  for (auto& c : added) kept.push_back(std::move(c));
+  grains_ = std::move(kept);
+  timings_.fragments += seconds_since(t0);
+}
+
+// The contacts, and the grains the screening selects with the loads their analyses get.
+Simulation::BreakageBatch Simulation::select_candidates() {
+  BreakageBatch b;
   auto t0 = Clock::now();
   const std::vector<Contact> all = engine_->contacts();
   engine_->read_state(grains_);
   timings_.contacts += seconds_since(t0);
 
   t0 = Clock::now();
-  const std::vector<std::vector<Contact>> on = contacts_by_grain(grains_, all);
-  std::vector<std::size_t> candidates;
-  std::vector<std::vector<PartnerForce>> loads;  // per candidate, what its analysis is given
+  b.on = contacts_by_grain(grains_, all);
   for (std::size_t i = 0; i < grains_.size(); ++i) {
-    const ScreeningResult sr = screen(grains_[i], on[i], screening_, model_->threshold_force(grains_[i]));
+    const ScreeningResult sr = screen(grains_[i], b.on[i], screening_, model_->threshold_force(grains_[i]));
     screened_.add(sr);
     if (!sr.selected) continue;
-    std::vector<PartnerForce> now = partner_forces(grains_[i], on[i]);
+    std::vector<PartnerForce> now = partner_forces(grains_[i], b.on[i]);
     if (skip_analysis(grains_[i], now, screening_)) {
       ++analyses_skipped_;
       continue;
     }
-    candidates.push_back(i);
-    loads.push_back(std::move(now));
+    b.candidates.push_back(i);
+    b.loads.push_back(std::move(now));
   }
   timings_.screening += seconds_since(t0);
-  if (candidates.empty()) return;
+  return b;
+}
 
-  // Analyses and fragment building of different grains are independent: one grain per
-  // task. Results are stored by candidate index so the outcome does not depend on the
-  // number of threads (or ranks, with an executor).
-  t0 = Clock::now();
-  const long n = static_cast<long>(candidates.size());
-  std::vector<BreakageAnalysis> results(n);
-  std::vector<FragmentResult> frags(n);
-  std::vector<std::string> errors(n);
+// Analyses of different grains are independent: one grain per task. Results are stored by
+// candidate index so the outcome does not depend on the number of threads (or ranks, with an
+// executor). An analysis that throws leaves its error in b.errors.
+void Simulation::run_analyses(BreakageBatch& b) {
+  const auto t0 = Clock::now();
+  const long n = static_cast<long>(b.candidates.size());
+  b.results.assign(n, BreakageAnalysis{});
+  b.frags.assign(n, FragmentResult{});
+  b.errors.assign(n, std::string());
   const int threads = std::max(1, settings_.threads);
   if (executor_) {
     std::vector<AnalysisJob> jobs(n);
     for (long k = 0; k < n; ++k) {
-      const std::size_t i = candidates[k];
-      jobs[k] = {&grains_[i], grains_[i].material, on[i]};
+      const std::size_t i = b.candidates[k];
+      jobs[k] = {&grains_[i], grains_[i].material, b.on[i]};
     }
-    executor_->analyse(*model_, ctx_.materials, jobs, results, errors);
+    executor_->analyse(*model_, ctx_.materials, jobs, b.results, b.errors);
   } else {
     // One grain: its analysis gets every thread (the peridynamic passes are bitwise the same
     // on any count), so a check that selects one grain does not leave the other cores idle.
     // (Outside any parallel region: nested in an inactive one, OpenMP would start new threads
     // for each of the analysis' thousands of regions.)
     const auto analyse = [&](long k) {
-      const Grain& g = grains_[candidates[k]];
+      const Grain& g = grains_[b.candidates[k]];
       try {
-        results[k] = model_->analyse(g, ctx_.materials[g.material], on[candidates[k]]);
+        b.results[k] = model_->analyse(g, ctx_.materials[g.material], b.on[b.candidates[k]]);
       } catch (const std::exception& e) {
-        errors[k] = e.what();
+        b.errors[k] = e.what();
       }
     };
     model_->set_analysis_threads(n == 1 ? threads : 1);
@@ -467,121 +538,143 @@ void Simulation::check_breakage(const RunState& st) {
     }
   }
   timings_.analyses += seconds_since(t0);
-  t0 = Clock::now();
+}
+
+// The fragments of every broken grain, one grain per task; a build that throws leaves its
+// error in b.errors.
+void Simulation::build_fragments(BreakageBatch& b) {
+  const auto t0 = Clock::now();
+  const long n = static_cast<long>(b.candidates.size());
+  const int threads = std::max(1, settings_.threads);
+  for (long k = 0; k < n; ++k) {
+    if (!b.errors[k].empty() || !b.results[k].broken || !b.results[k].fracture) continue;
+    if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
+  }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (long k = 0; k < n; ++k) {
-    if (!errors[k].empty() || !results[k].broken || !results[k].fracture) continue;
+    if (!b.errors[k].empty() || !b.results[k].broken || !b.results[k].fracture) continue;
     try {
-      if (!builder_) throw std::runtime_error("a grain broke but no fragment builder is configured");
-      frags[k] = builder_->build(*grains_[candidates[k]].shape, *results[k].fracture);
+      b.frags[k] = builder_->build(*grains_[b.candidates[k]].shape, *b.results[k].fracture);
     } catch (const std::exception& e) {
-      errors[k] = e.what();
+      b.errors[k] = e.what();
     }
   }
-  for (long k = 0; k < n; ++k)
-    if (!errors[k].empty()) {
-      const Grain& g = grains_[candidates[k]];
-      throw std::runtime_error("breakage analysis failed for grain " + std::to_string(g.id) + " (" +
-                               g.shape->describe() + "): " + errors[k]);
-    }
   timings_.fragments += seconds_since(t0);
+}
 
-  t0 = Clock::now();
-  std::vector<char> remove(grains_.size(), 0);
-  std::vector<Grain> added;
-  for (long k = 0; k < n; ++k) {
-    const Grain& parent = grains_[candidates[k]];
-    ++analyses_;
-    AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
-                       results[k]};
-    rec.analysis.fracture.reset();
-    // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
-    // The record says what the builder made of it: "no_split" when the model broke the
-    // grain but the builder returned fewer than two pieces (the grain stays as it is),
-    // "chip" when one child and removed fines came out.
-    // "crushed" when the builder removed all of it as fines (no child; FragmentBuilder.h).
-    const bool crushed = frags[k].children.empty() && frags[k].removed_volume > 0;
-    const std::size_t pieces = frags[k].children.size() + (frags[k].removed_volume > 0 ? 1 : 0);
-    if (results[k].broken && crushed) rec.analysis.outcome = "crushed";
-    else if (results[k].broken && pieces < 2) rec.analysis.outcome = "no_split";
-    else if (results[k].broken && frags[k].children.size() == 1) rec.analysis.outcome = "chip";
+// The outcome of candidate k told to the observers, and a broken grain replaced by its
+// children in the engine (added to `added`). True when the grain is to leave grains_.
+bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std::vector<Grain>& added) {
+  const Grain& parent = grains_[b.candidates[k]];
+  const BreakageAnalysis& result = b.results[k];
+  const FragmentResult& frag = b.frags[k];
+  ++analyses_;
+  AnalysisRecord rec{time_, step_, st.platen_stress, parent.id, parent.shape->equivalent_diameter(), parent.generation,
+                     result};
+  rec.analysis.fracture.reset();
+  if (!b.errors[k].empty()) {
+    // An analysis or a fragment build that threw (a degenerate geometry) leaves the grain
+    // as it was, before anything of it changed: the mass budget holds, and the run goes on.
+    rec.analysis.broken = false;
+    rec.analysis.outcome = "failed";
     for (auto& o : observers_) o->on_analysis(*this, rec);
-    if (!results[k].broken) {
-      // Remembered for the skip rule (Screening.h) only when the rule is on, so that runs
-      // without it write the checkpoints they always wrote.
-      if (screening_.skip_intact_tolerance > 0) grains_[candidates[k]].intact_load = std::move(loads[k]);
-      continue;
-    }
-    grains_[candidates[k]].intact_load.clear();
-    if (pieces < 2 && !crushed) {
-      // The model's verdict counts even when the builder could not split the grain (Grain.h).
-      ++grains_[candidates[k]].crush_count;
-      continue;
-    }
-
-    const Material& mat = ctx_.materials[parent.material];
-    BreakageEvent ev;
-    ev.time = time_;
-    ev.step = step_;
-    ev.platen_stress = st.platen_stress;
-    ev.parent = parent.id;
-    ev.parent_volume = parent.shape->volume();
-    ev.parent_diameter = parent.shape->equivalent_diameter();
-    ev.generation = parent.generation;
-    ev.fragment_method = frags[k].method;
-    ev.analysis = rec.analysis;
-    fallbacks_ += frags[k].fallbacks;
-    // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
-    double vsum = frags[k].removed_volume;
-    for (const auto& f : frags[k].children) vsum += f.shape->volume();
-    if (!(frags[k].removed_volume >= 0) || !(std::abs(vsum - ev.parent_volume) <= 1e-9 * ev.parent_volume))
-      throw std::runtime_error("fragment builder '" + builder_->name() + "' lost volume on grain " +
-                               std::to_string(parent.id) + ": children + removed " + std::to_string(vsum) +
-                               " m³ vs parent " + std::to_string(ev.parent_volume) + " m³");
-    ev.removed_volume = frags[k].removed_volume;
-    std::vector<Grain> children;
-    const Mat3 R = parent.orientation.matrix();
-    for (const auto& f : frags[k].children) {
-      const double d = f.shape->equivalent_diameter();
-      if (d < settings_.fines_diameter) {
-        ev.removed_volume += f.shape->volume();
-        continue;
-      }
-      Grain c;
-      c.id = next_id_++;
-      c.parent = parent.id;
-      c.origin = parent.origin;
-      c.generation = parent.generation + 1;
-      c.crush_count = parent.crush_count + 1;
-      c.shape = f.shape;
-      c.material = parent.material;
-      const Vec3 r = R * f.offset;
-      c.position = parent.position + r;
-      c.orientation = parent.orientation;
-      c.velocity = parent.velocity + cross(parent.angular_velocity, r);  // v + ω × (c_child − c_parent)
-      c.angular_velocity = parent.angular_velocity;
-      Rng rr = rng_.derive(static_cast<std::uint64_t>(c.id));
-      model_->inherit_strength(parent, c, mat, rr);
-      ev.children.push_back(c.id);
-      ev.child_volumes.push_back(f.shape->volume());
-      ev.child_diameters.push_back(d);
-      children.push_back(std::move(c));
-    }
-    removed_volume_ += ev.removed_volume;
-    removed_mass_ += ev.removed_volume * mat.density;
-    engine_->replace_grain(parent.id, children);
-    remove[candidates[k]] = 1;
-    for (auto& c : children) added.push_back(std::move(c));
-    ++events_;
-    for (auto& o : observers_) o->on_breakage(*this, ev);
+    note_analysis_failure(parent, b.errors[k]);
+    return false;
   }
-  std::vector<Grain> kept;
-  kept.reserve(grains_.size() + added.size());
-  for (std::size_t i = 0; i < grains_.size(); ++i)
-    if (!remove[i]) kept.push_back(std::move(grains_[i]));
-  for (auto& c : added) kept.push_back(std::move(c));
-  grains_ = std::move(kept);
-  timings_.fragments += seconds_since(t0);
+  // A split needs two pieces; one child plus builder-removed fines (a chip) also counts.
+  // The record says what the builder made of it: "no_split" when the model broke the
+  // grain but the builder returned fewer than two pieces (the grain stays as it is),
+  // "chip" when one child and removed fines came out.
+  // "crushed" when the builder removed all of it as fines (no child; FragmentBuilder.h).
+  const bool crushed = frag.children.empty() && frag.removed_volume > 0;
+  const std::size_t pieces = frag.children.size() + (frag.removed_volume > 0 ? 1 : 0);
+  if (result.broken && crushed) rec.analysis.outcome = "crushed";
+  else if (result.broken && pieces < 2) rec.analysis.outcome = "no_split";
+  else if (result.broken && frag.children.size() == 1) rec.analysis.outcome = "chip";
+  for (auto& o : observers_) o->on_analysis(*this, rec);
+  Grain& g = grains_[b.candidates[k]];
+  if (!result.broken) {
+    // Remembered for the skip rule (Screening.h) only when the rule is on, so that runs
+    // without it write the checkpoints they always wrote.
+    if (screening_.skip_intact_tolerance > 0) g.intact_load = std::move(b.loads[k]);
+    return false;
+  }
+  g.intact_load.clear();
+  if (pieces < 2 && !crushed) {
+    // The model's verdict counts even when the builder could not split the grain (Grain.h).
+    ++g.crush_count;
+    return false;
+  }
+  split_grain(parent, frag, rec, st, added);
+  return true;
+}
+
+// The grain replaced by the builder's pieces (those finer than simulation.fines_diameter are
+// removed as fines), the mass budget checked, the breakage event told to the observers.
+void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, const AnalysisRecord& rec,
+                             const RunState& st, std::vector<Grain>& added) {
+  const Material& mat = ctx_.materials[parent.material];
+  BreakageEvent ev;
+  ev.time = time_;
+  ev.step = step_;
+  ev.platen_stress = st.platen_stress;
+  ev.parent = parent.id;
+  ev.parent_volume = parent.shape->volume();
+  ev.parent_diameter = parent.shape->equivalent_diameter();
+  ev.generation = parent.generation;
+  ev.fragment_method = frag.method;
+  ev.analysis = rec.analysis;
+  fallbacks_ += frag.fallbacks;
+  // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
+  double vsum = frag.removed_volume;
+  for (const auto& f : frag.children) vsum += f.shape->volume();
+  if (!(frag.removed_volume >= 0) || !(std::abs(vsum - ev.parent_volume) <= 1e-9 * ev.parent_volume))
+    throw std::runtime_error("fragment builder '" + builder_->name() + "' lost volume on grain " +
+                             std::to_string(parent.id) + ": children + removed " + std::to_string(vsum) +
+                             " m³ vs parent " + std::to_string(ev.parent_volume) + " m³");
+  ev.removed_volume = frag.removed_volume;
+  std::vector<Grain> children = make_children(parent, frag, mat, ev);
+  removed_volume_ += ev.removed_volume;
+  removed_mass_ += ev.removed_volume * mat.density;
+  engine_->replace_grain(parent.id, children);
+  for (auto& c : children) added.push_back(std::move(c));
+  ++events_;
+  for (auto& o : observers_) o->on_breakage(*this, ev);
+}
+
+// The children of `parent`: ids, lineage, pose in the world (v + ω × (c_child − c_parent)),
+// inherited strength; pieces finer than simulation.fines_diameter go to ev.removed_volume.
+std::vector<Grain> Simulation::make_children(const Grain& parent, const FragmentResult& frag, const Material& mat,
+                                             BreakageEvent& ev) {
+  std::vector<Grain> children;
+  const Mat3 R = parent.orientation.matrix();
+  for (const auto& f : frag.children) {
+    const double d = f.shape->equivalent_diameter();
+    if (d < settings_.fines_diameter) {
+      ev.removed_volume += f.shape->volume();
+      continue;
+    }
+    Grain c;
+    c.id = next_id_++;
+    c.parent = parent.id;
+    c.origin = parent.origin;
+    c.generation = parent.generation + 1;
+    c.crush_count = parent.crush_count + 1;
+    c.shape = f.shape;
+    c.material = parent.material;
+    const Vec3 r = R * f.offset;
+    c.position = parent.position + r;
+    c.orientation = parent.orientation;
+    c.velocity = parent.velocity + cross(parent.angular_velocity, r);  // v + ω × (c_child − c_parent)
+    c.angular_velocity = parent.angular_velocity;
+    Rng rr = rng_.derive(static_cast<std::uint64_t>(c.id));
+    model_->inherit_strength(parent, c, mat, rr);
+    ev.children.push_back(c.id);
+    ev.child_volumes.push_back(f.shape->volume());
+    ev.child_diameters.push_back(d);
+    children.push_back(std::move(c));
+  }
+  return children;
 }
 
 }  // namespace crumble

@@ -3,6 +3,7 @@
 #pragma once
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <span>
 #include <vector>
@@ -139,7 +140,30 @@ class Simulation {
  private:
   double area() const;
   double time_step(double stress) const;
+  // The grains one breakage check selects, with what their analyses get and give.
+  struct BreakageBatch {
+    std::vector<std::vector<Contact>> on;          // contacts per grain
+    std::vector<std::size_t> candidates;           // indices into grains_
+    std::vector<std::vector<PartnerForce>> loads;  // per candidate, what its analysis is given
+    std::vector<BreakageAnalysis> results;
+    std::vector<FragmentResult> frags;
+    std::vector<std::string> errors;  // non-empty: the analysis or the fragment build threw
+  };
+  RunState start_run(RunSummary& sum);
+  double next_time_step(const RunState& st);
+  void step_once(double dt, RunState& st);
+  void fill_summary(RunSummary& sum, const RunState& st);
+  void summarise_solver(RunSummary& sum) const;
   void check_breakage(const RunState& st);
+  BreakageBatch select_candidates();
+  void run_analyses(BreakageBatch& b);
+  void build_fragments(BreakageBatch& b);
+  bool apply_outcome(BreakageBatch& b, long k, const RunState& st, std::vector<Grain>& added);
+  void split_grain(const Grain& parent, const FragmentResult& frag, const AnalysisRecord& rec, const RunState& st,
+                   std::vector<Grain>& added);
+  std::vector<Grain> make_children(const Grain& parent, const FragmentResult& frag, const Material& mat,
+                                   BreakageEvent& ev);
+  void note_analysis_failure(const Grain& g, const std::string& error);
   void drive_walls(double t, double dt);  // set every moving wall for the step [t, t + dt]
   void update_open_scene();               // discharge product, feed the next rock
   void finish_open_scene(RunSummary& sum) const;
@@ -165,6 +189,7 @@ class Simulation {
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;
+  std::map<std::string, long> analysis_failures_;  // analyses that threw, by the error's leading word
   ScreeningCounts screened_;
   Timings timings_;
   bool resumed_ = false;

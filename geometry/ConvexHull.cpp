@@ -2,12 +2,15 @@
 // distance tolerance, without facet merging. Coplanar neighbours stay separate triangles;
 // points on or within the tolerance of the hull are never vertices, and a final pass drops
 // hull vertices that are not extreme (a point in the middle of a face or an edge that was
-// picked before the corners around it) and rebuilds from the extreme points only.
+// picked before the corners around it) and rebuilds from the extreme points only. When no
+// tolerance gives a convex hull holding every point, the same quickhull decides visibility
+// by the exact sign of the orientation determinant (Shewchuk 1997) instead.
 #include "geometry/ConvexHull.h"
 #include "base/BuildCounters.h"
 #include "base/Format.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -16,6 +19,126 @@
 #include <utility>
 
 namespace crumble {
+namespace {
+
+// Exact arithmetic on floating-point expansions (Shewchuk 1997, "Adaptive precision
+// floating-point arithmetic and fast robust geometric predicates"): a number is held as a
+// sum of doubles, non-overlapping and in increasing magnitude, zeros dropped; its sign is
+// the sign of its largest component.
+using Expansion = std::vector<double>;
+
+// s + e = a + b exactly, s = fl(a + b) (Shewchuk 1997, Theorem 7, Two-Sum).
+void two_sum(double a, double b, double& s, double& e) {
+  s = a + b;
+  const double bv = s - a;
+  const double av = s - bv;
+  e = (a - av) + (b - bv);
+}
+
+// The exact a − b as an expansion.
+Expansion exact_difference(double a, double b) {
+  double s, e;
+  two_sum(a, -b, s, e);
+  Expansion x;
+  if (e != 0) x.push_back(e);
+  if (s != 0) x.push_back(s);
+  return x;
+}
+
+// e + b (Shewchuk 1997, Grow-Expansion, with zero elimination).
+Expansion grow(const Expansion& e, double b) {
+  Expansion h;
+  h.reserve(e.size() + 1);
+  double q = b;
+  for (const double c : e) {
+    double s, err;
+    two_sum(q, c, s, err);
+    if (err != 0) h.push_back(err);
+    q = s;
+  }
+  if (q != 0) h.push_back(q);
+  return h;
+}
+
+// e + f, growing e by each component of f.
+Expansion add(Expansion e, const Expansion& f) {
+  for (const double c : f) e = grow(e, c);
+  return e;
+}
+
+Expansion negated(Expansion e) {
+  for (double& c : e) c = -c;
+  return e;
+}
+
+// e × b (Shewchuk 1997, Scale-Expansion, with zero elimination); a × b = p + err exactly,
+// the rounding error of the product given by a fused multiply-add.
+Expansion scale(const Expansion& e, double b) {
+  Expansion h;
+  if (e.empty() || b == 0) return h;
+  h.reserve(2 * e.size());
+  double q = e[0] * b;
+  const double h0 = std::fma(e[0], b, -q);
+  if (h0 != 0) h.push_back(h0);
+  for (std::size_t i = 1; i < e.size(); ++i) {
+    const double t_hi = e[i] * b;
+    const double t_lo = std::fma(e[i], b, -t_hi);
+    double s, err;
+    two_sum(q, t_lo, s, err);
+    if (err != 0) h.push_back(err);
+    two_sum(t_hi, s, q, err);
+    if (err != 0) h.push_back(err);
+  }
+  if (q != 0) h.push_back(q);
+  return h;
+}
+
+Expansion multiply(const Expansion& e, const Expansion& f) {
+  Expansion out;
+  for (const double c : f) out = add(std::move(out), scale(e, c));
+  return out;
+}
+
+int sign(const Expansion& e) { return e.empty() ? 0 : (e.back() > 0 ? 1 : -1); }
+
+// ((b − a) × (c − a)) · (p − a) from the exact differences.
+int orientation_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
+  std::array<Expansion, 3> u, v, w;
+  for (int k = 0; k < 3; ++k) {
+    u[k] = exact_difference(b[k], a[k]);
+    v[k] = exact_difference(c[k], a[k]);
+    w[k] = exact_difference(p[k], a[k]);
+  }
+  // u · (v × w), one component of the cross product at a time.
+  Expansion det;
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    const Expansion cross_k = add(multiply(v[k1], w[k2]), negated(multiply(v[k2], w[k1])));
+    det = add(std::move(det), multiply(u[k], cross_k));
+  }
+  return sign(det);
+}
+
+}  // namespace
+
+int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
+  // Floating-point filter: the rounded determinant's error, the differences' rounding
+  // included, is below (7 + 56ε)ε times the permanent (Shewchuk 1997, §4.3, orient3d's
+  // bound A, ε = 2^−53); 1e-15 is above that. Only a determinant within the bound goes to
+  // the exact expansions.
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+  const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  const double wx = p.x - a.x, wy = p.y - a.y, wz = p.z - a.z;
+  const double det = ux * (vy * wz - vz * wy) + uy * (vz * wx - vx * wz) + uz * (vx * wy - vy * wx);
+  const double permanent = std::abs(ux) * (std::abs(vy * wz) + std::abs(vz * wy)) +
+                           std::abs(uy) * (std::abs(vz * wx) + std::abs(vx * wz)) +
+                           std::abs(uz) * (std::abs(vx * wy) + std::abs(vy * wx));
+  const double bound = 1e-15 * permanent;
+  if (det > bound) return 1;
+  if (det < -bound) return -1;
+  return orientation_exact(a, b, c, p);
+}
+
 namespace {
 
 struct Face {
@@ -30,8 +153,12 @@ struct Face {
 class Quickhull {
  public:
   // `rel_tol`: a point within rel_tol × the cloud's size of a face counts as on it (besides
-  // the few ulps below).
-  Quickhull(const std::vector<Vec3>& pts, const std::vector<int>& use, double rel_tol) : use_(use) {
+  // the few ulps below). `exact`: whether a point is above a face is decided by the exact
+  // orientation() of the input points instead (rel_tol is then unused past the flatness
+  // checks): the faces a point sees then form a disc on a convex hull, and the horizon is
+  // one loop, which the tolerance test does not guarantee for nearly coplanar points.
+  Quickhull(const std::vector<Vec3>& pts, const std::vector<int>& use, double rel_tol, bool exact = false)
+      : use_(use), in_(pts), exact_(exact) {
     // Work in coordinates centred on the bounding box: rounding of the plane tests then
     // scales with the cloud's size, not with its distance from the origin.
     Aabb box;
@@ -89,6 +216,12 @@ class Quickhull {
 
  private:
   double dist(const Face& f, int q) const { return dot(f.n, p_[q]) - f.off; }
+
+  // Whether q is above f, given its rounded distance d.
+  bool above(const Face& f, int q, double d) const {
+    if (!exact_) return d > eps_;
+    return orientation(in_[f.v[0]], in_[f.v[1]], in_[f.v[2]], in_[q]) > 0;
+  }
 
   bool make_plane(Face& f) const {
     const Vec3& a = p_[f.v[0]];
@@ -154,7 +287,13 @@ class Quickhull {
     if (!(best > flat_tol) || !(best > 4 * eps_))
       throw std::invalid_argument("convex_hull: the points are coplanar (flat cloud)");
     // Orient so that i3 is below the face (i0, i1, i2).
-    if (dot(pn, p_[i3] - p_[i0]) > 0) std::swap(i1, i2);
+    if (exact_) {
+      const int side = orientation(in_[i0], in_[i1], in_[i2], in_[i3]);
+      if (side == 0) throw std::runtime_error("convex_hull: internal error (flat initial simplex)");
+      if (side > 0) std::swap(i1, i2);
+    } else if (dot(pn, p_[i3] - p_[i0]) > 0) {
+      std::swap(i1, i2);
+    }
     const int a = i0, b = i1, c = i2, d = i3;
     // Faces of the tetrahedron, outward: (a,b,c) has d below it.
     const std::array<std::array<int, 3>, 4> tv = {{{a, b, c}, {a, d, b}, {b, d, c}, {c, d, a}}};
@@ -192,10 +331,10 @@ class Quickhull {
     for (int q : pts) {
       // The face the point is farthest above (ties → first), so conflict lists stay small.
       int best_f = -1;
-      double best_d = eps_;
+      double best_d = exact_ ? -std::numeric_limits<double>::infinity() : eps_;
       for (int f : candidates) {
         const double d = dist(faces_[f], q);
-        if (d > best_d) {
+        if (d > best_d && above(faces_[f], q, d)) {
           best_d = d;
           best_f = f;
         }
@@ -213,7 +352,7 @@ class Quickhull {
       const Face& f = faces_[visible[k]];
       for (int j = 0; j < 3; ++j) {
         const int g = f.nb[j];
-        if (g >= 0 && !is_vis[g] && dist(faces_[g], eye) > eps_) {
+        if (g >= 0 && !is_vis[g] && above(faces_[g], eye, dist(faces_[g], eye))) {
           is_vis[g] = 1;
           visible.push_back(g);
         }
@@ -275,6 +414,8 @@ class Quickhull {
   }
 
   std::vector<int> use_;
+  const std::vector<Vec3>& in_;  // the input points (exact tests)
+  bool exact_ = false;
   std::vector<Vec3> p_;
   std::vector<Face> faces_;
   double eps_ = 0;
@@ -326,31 +467,8 @@ std::vector<int> non_extreme_vertices(const std::vector<Vec3>& pts, const std::v
   return out;
 }
 
-// The hull of `points` with the relative on-face tolerance `rel_tol`.
-TriMesh hull_with_tolerance(const std::vector<Vec3>& points, double rel_tol) {
-  std::vector<int> use(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) use[i] = static_cast<int>(i);
-  std::vector<std::array<int, 3>> tris;
-  // At most a few rounds: each drops vertices that turned out not to be extreme.
-  for (int round = 0; round < 8; ++round) {
-    Quickhull qh(points, use, rel_tol);
-    qh.run();
-    tris = qh.triangles();
-    const std::vector<int> drop = non_extreme_vertices(points, tris);
-    if (drop.empty()) break;
-    std::vector<int> next;
-    std::vector<char> dropped(points.size(), 0);
-    for (int v : drop) dropped[v] = 1;
-    std::vector<char> on_hull(points.size(), 0);
-    for (const auto& t : tris)
-      for (int v : t) on_hull[v] = 1;
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (on_hull[i] && !dropped[i]) next.push_back(static_cast<int>(i));
-    if (next.size() < 4) throw std::invalid_argument("convex_hull: the points are coplanar (flat cloud)");
-    use = std::move(next);
-  }
-
-  // Compact: vertices in increasing input order.
+// The hull's triangles as a mesh of its vertices only, in increasing input order.
+TriMesh compact(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris) {
   std::vector<int> remap(points.size(), -1);
   for (const auto& t : tris)
     for (int v : t) remap[v] = 0;
@@ -363,6 +481,86 @@ TriMesh hull_with_tolerance(const std::vector<Vec3>& points, double rel_tol) {
   m.triangles.reserve(tris.size());
   for (const auto& t : tris) m.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
   return m;
+}
+
+// The hull vertices of `tris` that are not in `drop`, in increasing order.
+std::vector<int> hull_vertices_except(std::size_t n, const std::vector<std::array<int, 3>>& tris,
+                                      const std::vector<int>& drop) {
+  std::vector<char> on_hull(n, 0);
+  for (const auto& t : tris)
+    for (int v : t) on_hull[v] = 1;
+  for (int v : drop) on_hull[v] = 0;
+  std::vector<int> out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (on_hull[i]) out.push_back(static_cast<int>(i));
+  return out;
+}
+
+// The hull of `points` with the relative on-face tolerance `rel_tol`.
+TriMesh hull_with_tolerance(const std::vector<Vec3>& points, double rel_tol) {
+  std::vector<int> use(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) use[i] = static_cast<int>(i);
+  std::vector<std::array<int, 3>> tris;
+  // At most a few rounds: each drops vertices that turned out not to be extreme.
+  for (int round = 0; round < 8; ++round) {
+    Quickhull qh(points, use, rel_tol);
+    qh.run();
+    tris = qh.triangles();
+    const std::vector<int> drop = non_extreme_vertices(points, tris);
+    if (drop.empty()) break;
+    std::vector<int> next = hull_vertices_except(points.size(), tris, drop);
+    if (next.size() < 4) throw std::invalid_argument("convex_hull: the points are coplanar (flat cloud)");
+    use = std::move(next);
+  }
+  return compact(points, tris);
+}
+
+std::vector<std::array<int, 3>> exact_triangles(const std::vector<Vec3>& points, const std::vector<int>& use) {
+  Quickhull qh(points, use, 0.0, true);
+  qh.run();
+  return qh.triangles();
+}
+
+// Whether point q is on or below every face of `tris`, exactly.
+bool inside_exactly(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris, int q) {
+  for (const auto& t : tris)
+    if (orientation(points[t[0]], points[t[1]], points[t[2]], points[q]) > 0) return false;
+  return true;
+}
+
+// The hull by the quickhull with exact visibility. Its vertices that non_extreme_vertices()
+// flags (in the middle of a face or an edge, or with only slivers around them) are dropped
+// when the hull rebuilt without them still holds them exactly; those it does not hold (a
+// corner with only slivers around it) are put back.
+TriMesh exact_hull(const std::vector<Vec3>& points) {
+  std::vector<int> all(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) all[i] = static_cast<int>(i);
+  std::vector<std::array<int, 3>> tris = exact_triangles(points, all);
+  std::vector<int> drop = non_extreme_vertices(points, tris);
+  const std::vector<std::array<int, 3>> full = tris;
+  for (int round = 0; round < 3 && !drop.empty(); ++round) {
+    const std::vector<int> keep = hull_vertices_except(points.size(), full, drop);
+    std::vector<std::array<int, 3>> fewer;
+    try {
+      if (keep.size() < 4) break;
+      fewer = exact_triangles(points, keep);
+    } catch (const std::invalid_argument&) {
+      break;  // the kept vertices are flat: keep every vertex
+    }
+    std::vector<int> still;  // dropped and held by the rebuilt hull
+    for (int v : drop)
+      if (inside_exactly(points, fewer, v)) still.push_back(v);
+    if (still.size() == drop.size()) {
+      tris = std::move(fewer);
+      break;
+    }
+    drop = std::move(still);
+  }
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!inside_exactly(points, tris, static_cast<int>(i)))
+      throw std::runtime_error("convex_hull: internal error (point " + std::to_string(i) +
+                               " outside the exact hull)");
+  return compact(points, tris);
 }
 
 // Whether the mesh is convex and outward: no vertex above any face's plane by more than
@@ -382,6 +580,26 @@ bool is_convex_outward(const TriMesh& m) {
   return polyhedron_mass_properties(m).volume > 0;
 }
 
+// Whether every point lies below every face plane of the mesh, within 1e-9 of the mesh's
+// size. Slivers (height < 1e-6 of the longest edge) are skipped: their rounded normal may be
+// off by more than that tolerance over the mesh's size.
+bool contains_points(const TriMesh& m, const std::vector<Vec3>& points) {
+  const double tol = 1e-9 * norm(m.bounds().size());
+  std::vector<std::pair<Vec3, double>> planes;  // unit normal, offset
+  for (const auto& t : m.triangles) {
+    const Vec3 a = m.vertices[t[0]];
+    const Vec3 c = cross(m.vertices[t[1]] - a, m.vertices[t[2]] - a);
+    const double longest = std::max({norm2(m.vertices[t[1]] - a), norm2(m.vertices[t[2]] - a),
+                                     norm2(m.vertices[t[2]] - m.vertices[t[1]])});
+    const double len = norm(c);
+    if (len > 1e-6 * longest) planes.push_back({c / len, dot(c / len, a)});
+  }
+  for (const auto& p : points)
+    for (const auto& [n, h] : planes)
+      if (dot(n, p) - h > tol) return false;
+  return true;
+}
+
 }  // namespace
 
 TriMesh convex_hull(const std::vector<Vec3>& points) {
@@ -393,14 +611,21 @@ TriMesh convex_hull(const std::vector<Vec3>& points) {
   count_built(Representation::ConvexHull);
   // A few ulps decide what is on a face. Nearly coplanar points (the cuts of
   // geometry/ConvexPieces put many points on one plane) can then fold the hull over itself
-  // (two faces of a 72-point piece facing inwards, 0.1 of its size off); a tolerance of
-  // 1e-12 or 1e-10 of the cloud's size, which drops points that close to the hull, does not.
+  // (two faces of a 72-point piece facing inwards, 0.1 of its size off), make the faces an
+  // eye point sees a ring instead of a disc (the horizon is then no loop), or leave a point
+  // outside; a tolerance of 1e-12 or 1e-10 of the cloud's size, which drops points that
+  // close to the hull, mostly does not. A hull that is not convex or does not hold every
+  // point is not taken; when no tolerance gives one, the quickhull with exact visibility
+  // (orientation()) does, and it also tells a flat cloud (std::invalid_argument).
   for (const double rel_tol : {0.0, 1e-12, 1e-10}) {
-    TriMesh m = hull_with_tolerance(points, rel_tol);
-    if (is_convex_outward(m)) return m;
+    try {
+      TriMesh m = hull_with_tolerance(points, rel_tol);
+      if (is_convex_outward(m) && contains_points(m, points)) return m;
+    } catch (const std::runtime_error&) {
+    } catch (const std::invalid_argument&) {
+    }
   }
-  throw std::runtime_error("convex_hull: internal error: the hull of " + std::to_string(points.size()) +
-                           " points is not convex at any tolerance");
+  return exact_hull(points);
 }
 
 }  // namespace crumble

@@ -66,24 +66,64 @@ SplitPiece measure(std::shared_ptr<const LevelSetGrid> g) {
   return p;
 }
 
-SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int regions, const RegionFill& fill,
-                          const RegionFn& beyond, const SplitOptions& o, const NodeFn* custom_nodes) {
-  count_built(Representation::LevelSetSplit);
-  const Lattice L = lattice_of(W);
-  const std::size_t N = L.size();
+// A connected set of one region's inside nodes, with its index box.
+struct Component {
+  int region;
+  std::vector<std::size_t> nodes;
+  std::array<int, 3> lo, hi;
+};
+
+// A region with inside nodes: its values on the working lattice and the component of each
+// inside node (-1 elsewhere).
+struct RegionLabels {
+  int region;
+  std::vector<double> vals;
+  std::vector<int> label;
+};
+
+// Grows component `ci` of `region` from node s over face neighbours with vals < 0.
+Component flood(const Lattice& L, const std::vector<double>& vals, std::vector<int>& label, std::size_t s, int ci,
+                int region, std::vector<std::size_t>& stack) {
   const int nz = L.n[2];
-  const double h = L.h;
-  struct Component {
-    int region;
-    std::vector<std::size_t> nodes;
-    std::array<int, 3> lo, hi;
-  };
-  // Pass 1: the connected components of every region's inside nodes (face neighbours).
+  Component c;
+  c.region = region;
+  c.lo = {L.n[0], L.n[1], nz};
+  c.hi = {-1, -1, -1};
+  stack.assign(1, s);
+  label[s] = ci;
+  while (!stack.empty()) {
+    const std::size_t q = stack.back();
+    stack.pop_back();
+    c.nodes.push_back(q);
+    const int i = static_cast<int>(q % L.n[0]);
+    const int j = static_cast<int>((q / L.n[0]) % L.n[1]);
+    const int k = static_cast<int>(q / (static_cast<std::size_t>(L.n[0]) * L.n[1]));
+    const int ijk[3] = {i, j, k};
+    for (int a = 0; a < 3; ++a) {
+      c.lo[a] = std::min(c.lo[a], ijk[a]);
+      c.hi[a] = std::max(c.hi[a], ijk[a]);
+    }
+    const int nb[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int d = 0; d < 2 * L.dim; ++d) {
+      const int a = i + nb[d][0], b = j + nb[d][1], e = k + nb[d][2];
+      if (a < 0 || b < 0 || e < 0 || a >= L.n[0] || b >= L.n[1] || e >= nz) continue;
+      const std::size_t t = L.id(a, b, e);
+      if (label[t] >= 0 || !(vals[t] < 0)) continue;
+      label[t] = ci;
+      stack.push_back(t);
+    }
+  }
+  return c;
+}
+
+// Pass 1: the connected components of every region's inside nodes (face neighbours), and
+// the values and labels of the regions that have any.
+std::vector<Component> components(const Lattice& L, int regions, const RegionFill& fill,
+                                  std::vector<RegionLabels>& stored) {
+  const std::size_t N = L.size();
   std::vector<Component> comps;
   std::vector<double> vals;
   std::vector<std::size_t> stack;
-  std::vector<std::pair<int, std::vector<double>>> region_store;  // region -> values (only non-empty regions)
-  std::vector<std::vector<int>> labels_store;
   for (int r = 0; r < regions; ++r) {
     vals.assign(N, 0.0);
     fill(r, vals);
@@ -92,42 +132,72 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
     for (std::size_t s = 0; s < N; ++s) {
       if (!(vals[s] < 0) || label[s] >= 0) continue;
       any = true;
-      Component c;
-      c.region = r;
-      c.lo = {L.n[0], L.n[1], nz};
-      c.hi = {-1, -1, -1};
-      const int ci = static_cast<int>(comps.size());
-      stack.assign(1, s);
-      label[s] = ci;
-      while (!stack.empty()) {
-        const std::size_t q = stack.back();
-        stack.pop_back();
-        c.nodes.push_back(q);
-        const int i = static_cast<int>(q % L.n[0]);
-        const int j = static_cast<int>((q / L.n[0]) % L.n[1]);
-        const int k = static_cast<int>(q / (static_cast<std::size_t>(L.n[0]) * L.n[1]));
-        const int ijk[3] = {i, j, k};
-        for (int a = 0; a < 3; ++a) {
-          c.lo[a] = std::min(c.lo[a], ijk[a]);
-          c.hi[a] = std::max(c.hi[a], ijk[a]);
-        }
-        const int nb[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-        for (int d = 0; d < 2 * L.dim; ++d) {
-          const int a = i + nb[d][0], b = j + nb[d][1], e = k + nb[d][2];
-          if (a < 0 || b < 0 || e < 0 || a >= L.n[0] || b >= L.n[1] || e >= nz) continue;
-          const std::size_t t = L.id(a, b, e);
-          if (label[t] >= 0 || !(vals[t] < 0)) continue;
-          label[t] = ci;
-          stack.push_back(t);
-        }
-      }
-      comps.push_back(std::move(c));
+      comps.push_back(flood(L, vals, label, s, static_cast<int>(comps.size()), r, stack));
     }
-    if (any) {
-      region_store.emplace_back(r, vals);
-      labels_store.push_back(std::move(label));
-    }
+    if (any) stored.push_back({r, vals, std::move(label)});
   }
+  return comps;
+}
+
+// The values of component ci's child on its lattice box (the component's box padded by
+// `pad` nodes; its lowest node is `lo`, its counts `cnt`).
+std::vector<double> child_values(const Lattice& L, const LevelSetGrid& W, const RegionFn& beyond, const Component& c,
+                                 int ci, const RegionLabels& rl, const std::array<int, 3>& lo,
+                                 const std::array<int, 3>& cnt) {
+  std::vector<double> v(static_cast<std::size_t>(cnt[0]) * cnt[1] * cnt[2]);
+  for (int k = 0; k < cnt[2]; ++k)
+    for (int j = 0; j < cnt[1]; ++j)
+      for (int i = 0; i < cnt[0]; ++i) {
+        const int I = lo[0] + i, J = lo[1] + j, K = lo[2] + k;
+        double x;
+        if (I >= 0 && J >= 0 && K >= 0 && I < L.n[0] && J < L.n[1] && K < L.n[2]) {
+          const std::size_t id = L.id(I, J, K);
+          x = rl.vals[id];
+          // Inside nodes of another piece of the same region are outside this child.
+          if (x < 0 && rl.label[id] != ci) x = L.h;
+        } else {
+          const Vec3 p = L.point(I, J, K);
+          x = std::max(W.value(p), beyond(c.region, p));
+        }
+        v[static_cast<std::size_t>(i) + static_cast<std::size_t>(cnt[0]) * (j + static_cast<std::size_t>(cnt[1]) * k)] = x;
+      }
+  return v;
+}
+
+// The child grid: a signed distance again before use (Eq. 17's purpose: closest points,
+// no PDE); then kept as a child, or removed when thin, empty, below min_volume or without
+// a resolved zero level.
+void add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
+               SplitResult& out) {
+  const double h = g->spacing();
+  g = g->reinitialised();
+  const double vmin = *std::min_element(g->values().begin(), g->values().end());
+  SplitPiece piece = measure(g);
+  const bool thin = -vmin < 0.5 * o.min_thickness_cells * h;
+  if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) {
+    out.removed_volume += std::max(0.0, piece.volume);
+    out.removed.push_back(std::move(piece));
+    return;
+  }
+  try {
+    std::vector<Vec3> nodes;
+    std::vector<double> w;
+    if (custom_nodes) (*custom_nodes)(region, *g, nodes, w);
+    piece.grid = nodes.empty() ? g->with_values(g->values()) : g->with_nodes(std::move(nodes), std::move(w));
+  } catch (const std::invalid_argument&) {  // no zero level resolved: too small to be a grain
+    out.removed_volume += piece.volume;
+    out.removed.push_back(std::move(piece));
+    return;
+  }
+  out.children.push_back(std::move(piece));
+}
+
+SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int regions, const RegionFill& fill,
+                          const RegionFn& beyond, const SplitOptions& o, const NodeFn* custom_nodes) {
+  count_built(Representation::LevelSetSplit);
+  const Lattice L = lattice_of(W);
+  std::vector<RegionLabels> stored;
+  const std::vector<Component> comps = components(L, regions, fill, stored);
   SplitResult out;
   if (comps.size() <= 1) {  // the surfaces missed the grain (or it has no inside node)
     out.missed = true;
@@ -137,54 +207,16 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
   for (std::size_t ci = 0; ci < comps.size(); ++ci) {
     const Component& c = comps[ci];
     std::size_t slot = 0;
-    while (region_store[slot].first != c.region) ++slot;
-    const std::vector<double>& rv = region_store[slot].second;
-    const std::vector<int>& label = labels_store[slot];
+    while (stored[slot].region != c.region) ++slot;
     std::array<int, 3> lo{}, cnt{1, 1, 1};
     for (int a = 0; a < L.dim; ++a) {
       lo[a] = c.lo[a] - o.pad;
       cnt[a] = c.hi[a] - c.lo[a] + 1 + 2 * o.pad;
     }
-    const Vec3 origin = L.point(lo[0], lo[1], lo[2]);
-    std::vector<double> v(static_cast<std::size_t>(cnt[0]) * cnt[1] * cnt[2]);
-    for (int k = 0; k < cnt[2]; ++k)
-      for (int j = 0; j < cnt[1]; ++j)
-        for (int i = 0; i < cnt[0]; ++i) {
-          const int I = lo[0] + i, J = lo[1] + j, K = lo[2] + k;
-          double x;
-          if (I >= 0 && J >= 0 && K >= 0 && I < L.n[0] && J < L.n[1] && K < nz) {
-            const std::size_t id = L.id(I, J, K);
-            x = rv[id];
-            // Inside nodes of another piece of the same region are outside this child.
-            if (x < 0 && label[id] != static_cast<int>(ci)) x = h;
-          } else {
-            const Vec3 p = L.point(I, J, K);
-            x = std::max(W.value(p), beyond(c.region, p));
-          }
-          v[static_cast<std::size_t>(i) + static_cast<std::size_t>(cnt[0]) * (j + static_cast<std::size_t>(cnt[1]) * k)] = x;
-        }
-    // Eq. 17's purpose: a signed distance again before use (closest points, no PDE).
-    auto g = LevelSetGrid::from_values(L.dim, origin, h, cnt, std::move(v), node_spacing, false,
-                                       "level-set child")->reinitialised();
-    const double vmin = *std::min_element(g->values().begin(), g->values().end());
-    SplitPiece piece = measure(g);
-    const bool thin = -vmin < 0.5 * o.min_thickness_cells * h;
-    if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) {
-      out.removed_volume += std::max(0.0, piece.volume);
-      out.removed.push_back(std::move(piece));
-      continue;
-    }
-    try {
-      std::vector<Vec3> nodes;
-      std::vector<double> w;
-      if (custom_nodes) (*custom_nodes)(c.region, *g, nodes, w);
-      piece.grid = nodes.empty() ? g->with_values(g->values()) : g->with_nodes(std::move(nodes), std::move(w));
-    } catch (const std::invalid_argument&) {  // no zero level resolved: too small to be a grain
-      out.removed_volume += piece.volume;
-      out.removed.push_back(std::move(piece));
-      continue;
-    }
-    out.children.push_back(std::move(piece));
+    std::vector<double> v = child_values(L, W, beyond, c, static_cast<int>(ci), stored[slot], lo, cnt);
+    add_child(LevelSetGrid::from_values(L.dim, L.point(lo[0], lo[1], lo[2]), L.h, cnt, std::move(v), node_spacing,
+                                        false, "level-set child"),
+              c.region, o, custom_nodes, out);
   }
   return out;
 }

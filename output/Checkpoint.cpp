@@ -171,22 +171,11 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
   return j;
 }
 
-Checkpoint read_checkpoint(const std::string& path, const std::string& scenario, int dim) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path, "cannot open checkpoint (a run writes one when output.checkpoint_every or output.checkpoint_every_s is > 0)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  Json doc = parse_json_text(ss.str(), path);
-  if (!doc.is_object()) throw ConfigError(path, "a checkpoint must be a JSON object");
-  Config c(doc);
-  if (c.string("format") != "crumble-checkpoint") c.fail("format", "not a crumble checkpoint");
-  c.integer("version", 1, 1, 1);
-  const std::string name = c.string("scenario");
-  if (name != scenario) c.fail("scenario", "checkpoint of scenario '" + name + "', not '" + scenario + "'");
-  c.integer("dimension", dim, dim, dim);
-  Checkpoint cp;
-  Config s = c.required_child("state");
-  auto& st = cp.state;
+namespace {
+
+// The loop state of a checkpoint's "state" object.
+SimulationState read_state(const Config& s) {
+  SimulationState st;
   st.time = s.number("time", 0, 0);
   st.step = s.integer("step", 0, 0);
   st.initial_height = s.positive("initial_height");
@@ -213,61 +202,89 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   for (const auto& [reason, n] : ScreeningCounts{}.items())  // absent in older checkpoints: 0
     *st.screened.find(reason) = s.integer(std::string("screened_") + reason, 0, 0);
+  return st;
+}
+
+// The skip rule's memory (Grain::intact_load): [partner, fx, fy, fz] per partner, partners
+// increasing.
+std::vector<PartnerForce> read_intact_load(const Config& gc) {
+  std::vector<PartnerForce> out;
+  const Json& il = gc.raw("intact_load");
+  auto bad = [&](const std::string& why) { gc.fail("intact_load", why); };
+  if (!il.is_array()) bad("expected an array of [partner, fx, fy, fz] (partner: grain id, or -1 - wall index)");
+  for (std::size_t k = 0; k < il.size(); ++k) {
+    const Json& e = il[k];
+    const std::string at = "entry " + std::to_string(k) + ": ";
+    if (!e.is_array() || e.size() != 4 || !e[0].is_number_integer())
+      bad(at + "expected [partner, fx, fy, fz] with an integer partner");
+    PartnerForce p;
+    p.partner = e[0].get<GrainId>();
+    double f[3];
+    for (int d = 0; d < 3; ++d) {
+      if (!e[d + 1].is_number()) bad(at + "force components must be numbers (N)");
+      f[d] = e[d + 1].get<double>();
+      if (!std::isfinite(f[d])) bad(at + "force components must be finite (N)");
+    }
+    p.force = {f[0], f[1], f[2]};
+    if (!out.empty() && !(out.back().partner < p.partner)) bad(at + "partners must be in increasing order, each once");
+    out.push_back(p);
+  }
+  return out;
+}
+
+// One grain of the checkpoint; its shape is an index into `shapes`.
+Grain read_grain(const Config& gc, const std::vector<Shape::Ptr>& shapes) {
+  Grain g;
+  g.id = gc.integer("id", 0, 0);
+  g.parent = gc.integer("parent", -1, -1);
+  g.generation = static_cast<int>(gc.integer("generation", 0, 0));
+  g.origin = gc.integer("origin", g.generation == 0 ? g.id : g.parent, -1);
+  const long si = gc.integer("shape", 0, 0, static_cast<long>(shapes.size()) - 1);
+  g.shape = shapes[static_cast<std::size_t>(si)];
+  g.material = static_cast<int>(gc.integer("material", 0, 0));
+  g.position = gc.vec3("position", {});
+  auto q = gc.numbers("orientation", {1, 0, 0, 0});
+  if (q.size() != 4) gc.fail("orientation", "expected [w, x, y, z]");
+  g.orientation = Quat{q[0], q[1], q[2], q[3]}.normalized();
+  g.velocity = gc.vec3("velocity", {});
+  g.angular_velocity = gc.vec3("angular_velocity", {});
+  // Every named strength value of the model (Grain::strength), by name.
+  if (gc.is_object("strength")) {
+    Config sv = gc.child("strength");
+    for (auto it = sv.doc().begin(); it != sv.doc().end(); ++it) g.strength.set(it.key(), sv.number(it.key()));
+  } else if (gc.has("strength")) {
+    // Checkpoints written before strength values had names came from peridynamics only.
+    g.strength.set("gc_J_m2", gc.number("strength", 0));
+    g.strength.set("threshold_force_N", gc.number("threshold_force", 0));
+  }
+  g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
+  if (gc.has("intact_load")) g.intact_load = read_intact_load(gc);
+  return g;
+}
+
+}  // namespace
+
+Checkpoint read_checkpoint(const std::string& path, const std::string& scenario, int dim) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, "cannot open checkpoint (a run writes one when output.checkpoint_every or output.checkpoint_every_s is > 0)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  Json doc = parse_json_text(ss.str(), path);
+  if (!doc.is_object()) throw ConfigError(path, "a checkpoint must be a JSON object");
+  Config c(doc);
+  if (c.string("format") != "crumble-checkpoint") c.fail("format", "not a crumble checkpoint");
+  c.integer("version", 1, 1, 1);
+  const std::string name = c.string("scenario");
+  if (name != scenario) c.fail("scenario", "checkpoint of scenario '" + name + "', not '" + scenario + "'");
+  c.integer("dimension", dim, dim, dim);
+  Checkpoint cp;
+  cp.state = read_state(c.required_child("state"));
   std::vector<Shape::Ptr> shapes;
   for (auto& sc : c.children("shapes")) {
     Shape::Ptr sh = shape_from_saved_config(sc, dim);
     shapes.push_back(std::move(sh));
   }
-  for (auto& gc : c.children("grains")) {
-    Grain g;
-    g.id = gc.integer("id", 0, 0);
-    g.parent = gc.integer("parent", -1, -1);
-    g.generation = static_cast<int>(gc.integer("generation", 0, 0));
-    g.origin = gc.integer("origin", g.generation == 0 ? g.id : g.parent, -1);
-    const long si = gc.integer("shape", 0, 0, static_cast<long>(shapes.size()) - 1);
-    g.shape = shapes[static_cast<std::size_t>(si)];
-    g.material = static_cast<int>(gc.integer("material", 0, 0));
-    g.position = gc.vec3("position", {});
-    auto q = gc.numbers("orientation", {1, 0, 0, 0});
-    if (q.size() != 4) gc.fail("orientation", "expected [w, x, y, z]");
-    g.orientation = Quat{q[0], q[1], q[2], q[3]}.normalized();
-    g.velocity = gc.vec3("velocity", {});
-    g.angular_velocity = gc.vec3("angular_velocity", {});
-    // Every named strength value of the model (Grain::strength), by name.
-    if (gc.is_object("strength")) {
-      Config sv = gc.child("strength");
-      for (auto it = sv.doc().begin(); it != sv.doc().end(); ++it) g.strength.set(it.key(), sv.number(it.key()));
-    } else if (gc.has("strength")) {
-      // Checkpoints written before strength values had names came from peridynamics only.
-      g.strength.set("gc_J_m2", gc.number("strength", 0));
-      g.strength.set("threshold_force_N", gc.number("threshold_force", 0));
-    }
-    g.crush_count = static_cast<int>(gc.integer("crush_count", 0, 0));
-    if (gc.has("intact_load")) {
-      const Json& il = gc.raw("intact_load");
-      auto bad = [&](const std::string& why) { gc.fail("intact_load", why); };
-      if (!il.is_array()) bad("expected an array of [partner, fx, fy, fz] (partner: grain id, or -1 - wall index)");
-      for (std::size_t k = 0; k < il.size(); ++k) {
-        const Json& e = il[k];
-        const std::string at = "entry " + std::to_string(k) + ": ";
-        if (!e.is_array() || e.size() != 4 || !e[0].is_number_integer())
-          bad(at + "expected [partner, fx, fy, fz] with an integer partner");
-        PartnerForce p;
-        p.partner = e[0].get<GrainId>();
-        double f[3];
-        for (int d = 0; d < 3; ++d) {
-          if (!e[d + 1].is_number()) bad(at + "force components must be numbers (N)");
-          f[d] = e[d + 1].get<double>();
-          if (!std::isfinite(f[d])) bad(at + "force components must be finite (N)");
-        }
-        p.force = {f[0], f[1], f[2]};
-        if (!g.intact_load.empty() && !(g.intact_load.back().partner < p.partner))
-          bad(at + "partners must be in increasing order, each once");
-        g.intact_load.push_back(p);
-      }
-    }
-    cp.grains.push_back(std::move(g));
-  }
+  for (auto& gc : c.children("grains")) cp.grains.push_back(read_grain(gc, shapes));
   if (c.has("engine_state")) cp.engine_state = c.raw("engine_state");
   if (c.has("run")) {
     cp.run_info = c.raw("run");

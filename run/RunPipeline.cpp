@@ -258,28 +258,39 @@ std::string representations_line(const RepresentationCounts& built) {
   return s.empty() ? "none" : s;
 }
 
-RunResult execute(const RunRequest& req) {
-  const std::string& out = req.out;
-  // Everything this run builds counts, the scenario's shapes and packing included.
-  const RepresentationCounts built_before = representations_built();
-  Scenario sc = build_request(req);
+// Where the run starts: the settling of its packing (this run's, or on --resume the run it
+// continues), the step it resumes at, and the changes of settings on --resume.
+struct RunStart {
+  Json changed_on_resume = Json::array();
+  double settle_before = -1;
+  long settle_steps = 0, resumed_step = -1;
+  bool packing_settled = true;
+  Json run_info = Json::object();
+};
+
+// The scenario's notes, and a warning when its threads oversubscribe the machine.
+void print_scenario_notes(const Scenario& sc) {
   for (const auto& n : sc.notes) std::cerr << "crumble: note: " << n << "\n";
   if (sc.threads > 1)  // one thread never waits at a barrier: no need to read the machine's load
     if (const std::string w = thread_oversubscription_warning(sc.threads, current_cpu_load()); !w.empty())
       std::cerr << "crumble: warning: " << w << "\n";
+}
+
+// --out checked for --resume (the settings that changed noted and written), or prepared
+// for a fresh run; then created.
+void prepare_out(const RunRequest& req, const Scenario& sc, RunStart& st) {
+  const std::string& out = req.out;
   if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
   if (req.resume && req.packing_only) throw InputError("--resume: a packing stage has nothing to resume");
-  double settle_before = -1;
-  Json changed_on_resume = Json::array();
   if (req.resume) {
-    changed_on_resume = check_resumable(out, sc.effective);
-    settle_before = previous_settle_steps(out);
+    st.changed_on_resume = check_resumable(out, sc.effective);
+    st.settle_before = previous_settle_steps(out);
     // From here on the run goes on with these settings: effective_scenario.json says so, and
     // summary.json's resume_changes keeps what they were before.
-    for (const Json& c : changed_on_resume)
+    for (const Json& c : st.changed_on_resume)
       std::cerr << "crumble: note: resuming with " << c["path"].get<std::string>() << " " << c["now"].dump()
                 << " (was " << c["was"].dump() << ")\n";
-    if (!changed_on_resume.empty())
+    if (!st.changed_on_resume.empty())
       write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
   } else {
     prepare_fresh_out(out, req.force);
@@ -287,84 +298,80 @@ RunResult execute(const RunRequest& req) {
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
+}
 
-  RunResult res;
-  res.out = out;
+// Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
+void resume_run(const RunRequest& req, Scenario& sc, RunStart& st) {
+  const std::string& out = req.out;
   Simulation& sim = *sc.sim;
-  // Ctrl-C / SIGTERM: finish the current step, then write every output and the checkpoint.
-  install_stop_signals();
-  const auto t0 = std::chrono::steady_clock::now();
-  long settle_steps = 0, resumed_step = -1;
-  bool packing_settled = true;
-  Json run_info = Json::object();
-  if (req.resume) {
-    // Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
-    Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
-    Container c = sc.packing.container;
-    c.height = cp.state.platen_position;
-    sim.set_container(c);
-    resumed_step = cp.state.step;
-    sim.resume(cp.state, std::move(cp.grains));
-    restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
-    // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
-    run_info = cp.run_info;
-    if (run_info.contains("packing_settle_steps") && run_info["packing_settle_steps"].is_number())
-      settle_before = run_info["packing_settle_steps"].get<double>();
-    if (!req.quiet)
-      std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
-                << sim.grains().size() << " grains)\n";
-  } else {
-    write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
-    if (!req.quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-    const SettleResult settled = build_packing(sim, sc.packing, &g_stop);
-    settle_steps = settled.steps;
-    if (settled.interrupted) {
-      // An unsettled packing is not the start of this run: nothing is written that a
-      // later --resume or another scenario could take for it.
-      std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
-                << " steps); no packing.json or checkpoint was written: start the run again (with --force to reuse this folder)\n";
-      res.status = interrupted_status();
-      res.reason = "interrupted while the packing settled";
-      return res;
-    }
-    if (!settled.converged)
-      std::cerr << "crumble: warning: the packing did not come to rest within packing.settle.max_time ("
-                << settled.steps << " steps); the run starts from it anyway (summary.json: packing_settled false)\n";
-    packing_settled = settled.converged;
-    write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
-    if (!req.quiet && settle_steps > 0) std::cerr << "crumble: packing settled in " << settle_steps << " steps\n";
-  }
-  const std::string packing_hash = file_sha256(packing_source(sc, out));
+  Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
+  Container c = sc.packing.container;
+  c.height = cp.state.platen_position;
+  sim.set_container(c);
+  st.resumed_step = cp.state.step;
+  sim.resume(cp.state, std::move(cp.grains));
+  restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
+  // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
+  st.run_info = cp.run_info;
+  if (st.run_info.contains("packing_settle_steps") && st.run_info["packing_settle_steps"].is_number())
+    st.settle_before = st.run_info["packing_settle_steps"].get<double>();
+  if (!req.quiet)
+    std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
+              << sim.grains().size() << " grains)\n";
+}
 
-  if (req.packing_only) {
-    Json j;
-    j["stage"] = "packing";
-    j["scenario"] = sc.name;
-    j["engine"] = sc.engine_name;
-    j["seed"] = sc.seed;
-    j["threads"] = sc.threads;
-    j["grains"] = sim.grains().size();
-    j["packing_settle_steps"] = static_cast<double>(settle_steps);
-    j["packing_settled"] = packing_settled ? 1.0 : 0.0;
-    j["packing_hash"] = packing_hash;
-  if (!changed_on_resume.empty()) j["resume_changes"] = changed_on_resume;
-    j["representations_built"] = representations_json(representations_built() - built_before);
-    j["wall_seconds"] = seconds_since(t0);
-    write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
-    res.summary = j;
-    if (!req.quiet)
-      std::cerr << "crumble: packing of " << sim.grains().size() << " grains in " << out << "/packing.json\n";
-    return res;
+// A fresh run: effective_scenario.json, the packing settled and written. False when a
+// signal interrupted the settling (then nothing of the packing is written).
+bool settle_packing(const RunRequest& req, Scenario& sc, RunStart& st) {
+  const std::string& out = req.out;
+  Simulation& sim = *sc.sim;
+  write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
+  if (!req.quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
+  const SettleResult settled = build_packing(sim, sc.packing, &g_stop);
+  st.settle_steps = settled.steps;
+  if (settled.interrupted) {
+    // An unsettled packing is not the start of this run: nothing is written that a
+    // later --resume or another scenario could take for it.
+    std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
+              << " steps); no packing.json or checkpoint was written: start the run again (with --force to reuse this folder)\n";
+    return false;
   }
+  if (!settled.converged)
+    std::cerr << "crumble: warning: the packing did not come to rest within packing.settle.max_time ("
+              << settled.steps << " steps); the run starts from it anyway (summary.json: packing_settled false)\n";
+  st.packing_settled = settled.converged;
+  write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
+  if (!req.quiet && st.settle_steps > 0) std::cerr << "crumble: packing settled in " << st.settle_steps << " steps\n";
+  return true;
+}
 
-  if (!req.resume) run_info = {{"packing_settle_steps", settle_steps}, {"packing_settled", packing_settled}};
-  attach_standard_observers(sc, out, run_info);
+// --packing-only: summary.json of the packing stage.
+Json packing_stage_summary(const Scenario& sc, const RunStart& st, const std::string& packing_hash,
+                           const RepresentationCounts& built) {
+  Json j;
+  j["stage"] = "packing";
+  j["scenario"] = sc.name;
+  j["engine"] = sc.engine_name;
+  j["seed"] = sc.seed;
+  j["threads"] = sc.threads;
+  j["grains"] = sc.sim->grains().size();
+  j["packing_settle_steps"] = static_cast<double>(st.settle_steps);
+  j["packing_settled"] = st.packing_settled ? 1.0 : 0.0;
+  j["packing_hash"] = packing_hash;
+  if (!st.changed_on_resume.empty()) j["resume_changes"] = st.changed_on_resume;
+  j["representations_built"] = representations_json(built);
+  return j;
+}
+
+// The loading: observers attached, the simulation run with a progress line every few
+// seconds on a terminal; in a log (stderr not a terminal: a batch job, a test) one a
+// minute, so long runs still show where they are without flooding the log. --quiet: none.
+RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) {
+  Simulation& sim = *sc.sim;
+  attach_standard_observers(sc, req.out, st.run_info);
   sim.set_stop_flag(&g_stop);
   if (req.analysis_executor) sim.set_analysis_executor(req.analysis_executor(request_document(req), sc));
   const auto t_loading = std::chrono::steady_clock::now();
-  // A progress line every few seconds on a terminal; in a log (stderr not a terminal: a
-  // batch job, a test) one a minute, so long runs still show where they are without
-  // flooding the log. --quiet: none.
   const double every = req.progress_every_s > 0 ? req.progress_every_s : (isatty(STDERR_FILENO) ? 2.0 : 60.0);
   EtaEstimator eta;
   double last_line = 0;
@@ -378,19 +385,25 @@ RunResult execute(const RunRequest& req) {
   RunSummary sum = sim.run(progress);
   // A resumed run settled nothing: report the settling of the run it continues.
   if (!req.resume) {
-    sum.extra["packing_settle_steps"] = static_cast<double>(settle_steps);
-    sum.extra["packing_settled"] = packing_settled ? 1.0 : 0.0;
-  } else if (settle_before >= 0) {
-    sum.extra["packing_settle_steps"] = settle_before;
-    if (run_info.contains("packing_settled") && run_info["packing_settled"].is_boolean())
-      sum.extra["packing_settled"] = run_info["packing_settled"].get<bool>() ? 1.0 : 0.0;
+    sum.extra["packing_settle_steps"] = static_cast<double>(st.settle_steps);
+    sum.extra["packing_settled"] = st.packing_settled ? 1.0 : 0.0;
+  } else if (st.settle_before >= 0) {
+    sum.extra["packing_settle_steps"] = st.settle_before;
+    if (st.run_info.contains("packing_settled") && st.run_info["packing_settled"].is_boolean())
+      sum.extra["packing_settled"] = st.run_info["packing_settled"].get<bool>() ? 1.0 : 0.0;
   }
-  if (req.resume) sum.extra["resumed_from_step"] = static_cast<double>(resumed_step);
-  sum.wall_seconds = seconds_since(t0);
+  if (req.resume) sum.extra["resumed_from_step"] = static_cast<double>(st.resumed_step);
+  return sum;
+}
+
+// summary.json of a run: the summary's figures, the packing's hash, the changes on
+// --resume, the analyses per MPI rank and the representations built.
+Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, const std::string& packing_hash,
+                 const RepresentationCounts& built) {
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
-  if (!changed_on_resume.empty()) j["resume_changes"] = changed_on_resume;
-  if (const AnalysisExecutor* ex = sim.analysis_executor()) {
+  if (!st.changed_on_resume.empty()) j["resume_changes"] = st.changed_on_resume;
+  if (const AnalysisExecutor* ex = sc.sim->analysis_executor()) {
     j["analysis_ranks"] = ex->ranks();
     Json n = Json::array(), t = Json::array();
     for (const auto& r : ex->load()) {
@@ -400,17 +413,58 @@ RunResult execute(const RunRequest& req) {
     j["analyses_per_rank"] = n;
     j["analysis_seconds_per_rank"] = t;
   }
-  const RepresentationCounts built = representations_built() - built_before;
   j["representations_built"] = representations_json(built);
-  write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
-  res.summary = j;
+  return j;
+}
+
+void report_done(const RunRequest& req, const Scenario& sc, const RunSummary& sum, const RepresentationCounts& built) {
   if (sum.interrupted)
     std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
               << (sc.output.checkpoint_every > 0 || sc.output.checkpoint_every_s > 0 ? ", resume with --resume\n" : "\n");
   if (!req.quiet)
     std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
-              << " grains, " << sum.breakage_events << " breakage events; results in " << out << "\n"
+              << " grains, " << sum.breakage_events << " breakage events; results in " << req.out << "\n"
               << "crumble: representations built: " << representations_line(built) << "\n";
+}
+
+RunResult execute(const RunRequest& req) {
+  const std::string& out = req.out;
+  // Everything this run builds counts, the scenario's shapes and packing included.
+  const RepresentationCounts built_before = representations_built();
+  Scenario sc = build_request(req);
+  print_scenario_notes(sc);
+  RunStart st;
+  prepare_out(req, sc, st);
+  RunResult res;
+  res.out = out;
+  // Ctrl-C / SIGTERM: finish the current step, then write every output and the checkpoint.
+  install_stop_signals();
+  const auto t0 = std::chrono::steady_clock::now();
+  if (req.resume) {
+    resume_run(req, sc, st);
+  } else if (!settle_packing(req, sc, st)) {
+    res.status = interrupted_status();
+    res.reason = "interrupted while the packing settled";
+    return res;
+  }
+  const std::string packing_hash = file_sha256(packing_source(sc, out));
+  if (req.packing_only) {
+    Json j = packing_stage_summary(sc, st, packing_hash, representations_built() - built_before);
+    j["wall_seconds"] = seconds_since(t0);
+    write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
+    res.summary = j;
+    if (!req.quiet)
+      std::cerr << "crumble: packing of " << sc.sim->grains().size() << " grains in " << out << "/packing.json\n";
+    return res;
+  }
+  if (!req.resume) st.run_info = {{"packing_settle_steps", st.settle_steps}, {"packing_settled", st.packing_settled}};
+  RunSummary sum = run_loading(req, sc, st);
+  sum.wall_seconds = seconds_since(t0);
+  const RepresentationCounts built = representations_built() - built_before;
+  const Json j = run_summary(sum, sc, st, packing_hash, built);
+  write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
+  res.summary = j;
+  report_done(req, sc, sum, built);
   // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
   if (req.plots && sc.output.plots) plots_after(out, req.quiet);
   if (sum.interrupted) {

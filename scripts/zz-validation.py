@@ -11,7 +11,7 @@ files of a run still going, too) and prints, as Markdown tables:
   - the slope of the NCL in log10 e - log10 sigma over the reached part above 10 MPa and above
     the yield the paper names (6-8 MPa); the paper: about 0.52 (Fig. 12);
   - per grain snapshot: fractal dimension by number, N(d > d0) ~ d0^-D (eq. 17, fitted as
-    crumble's core/Analysis fractal_dimension does: 12 geometric sieves between the smallest and
+    crumble's core/Measures fractal_dimension does: 12 geometric sieves between the smallest and
     largest grain, sieves retaining fewer than max(10, n/1000) grains left out), and the share of
     grains with Zingg EI and FI both in [0.5, 1] and of crushed ones (generation > 0); the paper:
     D rises to about 2.3 (Fig. 17), EI and FI mostly 0.5-1.0 (Fig. 18).

@@ -184,47 +184,31 @@ RawScene raw_scene_of(const Simulation& sim, const Container& box, double dt) {
   return r;
 }
 
-// `crumble bench engine --engine E [--scenario F]`: the scenario's packing (placed, not
-// settled) on engine E; `settle` steps let the grains fall into contact, then `steps` steps
-// are timed through the adapter (Engine::step, and separately the read-out the Simulation
-// does: read_state + contacts) and, for bullet and ode, through the raw library on the same
-// bodies from the same state (RawBulletBench / RawOdeBench). The adapter runs with the raw
-// baseline's solver settings (fixed iterations: Bullet's tolerance exit off; ODE the
-// scenario's contact points per pair in both), so both do the same solver work. Then the
-// same number of steps through the simulation's loop (loop_phase).
-Json bench_engine(const std::string& engine, long steps, long settle, int threads, const std::string& file_in) {
-  const std::string file = file_in.empty() ? "scenarios/oedometer_rigid_quick.json" : file_in;
+// The scenario of `bench engine`: on engine E (Bullet with its tolerance exit off), the
+// loop phase `steps` steps of Simulation::run with the platen held still as in the adapter
+// phase.
+Scenario bench_scenario(const std::string& engine, const std::string& file, long steps, int threads) {
   Json doc = load_scenario_file(file);
   if (!doc.contains("engine") || !doc["engine"].is_object()) doc["engine"] = Json::object();
-  const Json scenario_engine = doc["engine"];
   doc["engine"]["type"] = engine;
   if (engine == "bullet") {
     doc["engine"]["solver_tolerance"] = 0;
     doc["engine"]["solver_residual"] = 0;
   }
-  doc["simulation"]["max_steps"] = steps;  // the loop phase: `steps` steps of Simulation::run,
-  doc["loading"] = Json{{"mode", "none"}};  // with the platen held still as in the adapter phase
+  doc["simulation"]["max_steps"] = steps;
+  doc["loading"] = Json{{"mode", "none"}};
   BuildOptions opt;
   opt.threads = threads;
   opt.source_name = file;
   Scenario sc = build_scenario(doc, opt);
   if (sc.sim->context().dimension != 3 && engine != "lsdem")
     throw ConfigError(file + ": /dimension", "bench engine compares 3D scenes");
-  // settle < 0: the scenario's own packing procedure (settled under the platen, as `run`
-  // does); otherwise the grains are placed and fall for `settle` steps.
-  if (settle >= 0) sc.packing.settle = false;
-  const auto t_settle = std::chrono::steady_clock::now();
-  build_packing(*sc.sim, sc.packing);
-  Engine& eng = sc.sim->engine();
-  const double dt = std::min(sc.sim->settings().time_steps.front().dt, eng.max_stable_dt());
-  eng.set_platen(PlatenCommand{});
-  for (long k = 0; k < settle; ++k) eng.step(dt);
-  const double settle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_settle).count();
-  sc.sim->sync_grains();
-  RawScene raw = raw_scene_of(*sc.sim, sc.sim->container(), dt);
+  return sc;
+}
 
-  // The raw world gets the adapter's solver settings and length scale; both start from
-  // this state and are stepped alternately, so the machine's load falls on both alike.
+// The raw library's world for a bullet or ode adapter (null for lsdem), with the adapter's
+// solver settings and length scale.
+std::unique_ptr<RawWorld> raw_world_for(Engine& eng, const Scenario& sc, RawScene& raw) {
   std::unique_ptr<RawWorld> raw_world;
   Json engine_section = sc.effective["engine"];
   const Config engine_cfg(engine_section);
@@ -251,26 +235,66 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
     raw_world = make_raw_ode_world(raw);
   }
 #endif
+  return raw_world;
+}
+
+// Wall time (s) of the adapter's steps, of its read-out and of the raw world's steps, and
+// the contacts each counted, over `steps` alternate steps.
+struct StepTimes {
+  double step = 0, read = 0, raw = 0, contacts = 0, raw_contacts = 0;
+};
+
+StepTimes time_steps(Engine& eng, RawWorld* raw_world, std::vector<Grain>& grains, long steps, double dt) {
   using clock = std::chrono::steady_clock;
   auto seconds = [](clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
-  double t_step = 0, t_read = 0, t_raw = 0, contacts = 0, raw_contacts = 0;
-  std::vector<Grain> grains = sc.sim->grains();
+  StepTimes t;
   for (long k = 0; k < steps; ++k) {
     const auto a = clock::now();
     eng.step(dt);
     const auto b = clock::now();
     eng.read_state(grains);
-    contacts += static_cast<double>(eng.contacts().size());
+    t.contacts += static_cast<double>(eng.contacts().size());
     const auto c = clock::now();
-    t_step += seconds(a, b);
-    t_read += seconds(b, c);
+    t.step += seconds(a, b);
+    t.read += seconds(b, c);
     if (raw_world) {
       const auto d = clock::now();
       raw_world->step();
-      t_raw += seconds(d, clock::now());
-      raw_contacts += raw_world->contact_pairs();
+      t.raw += seconds(d, clock::now());
+      t.raw_contacts += raw_world->contact_pairs();
     }
   }
+  return t;
+}
+
+// `crumble bench engine --engine E [--scenario F]`: the scenario's packing (placed, not
+// settled) on engine E; `settle` steps let the grains fall into contact, then `steps` steps
+// are timed through the adapter (Engine::step, and separately the read-out the Simulation
+// does: read_state + contacts) and, for bullet and ode, through the raw library on the same
+// bodies from the same state (RawBulletBench / RawOdeBench). The adapter runs with the raw
+// baseline's solver settings (fixed iterations: Bullet's tolerance exit off; ODE the
+// scenario's contact points per pair in both), so both do the same solver work. Then the
+// same number of steps through the simulation's loop (loop_phase).
+Json bench_engine(const std::string& engine, long steps, long settle, int threads, const std::string& file_in) {
+  const std::string file = file_in.empty() ? "scenarios/oedometer_rigid_quick.json" : file_in;
+  Scenario sc = bench_scenario(engine, file, steps, threads);
+  // settle < 0: the scenario's own packing procedure (settled under the platen, as `run`
+  // does); otherwise the grains are placed and fall for `settle` steps.
+  if (settle >= 0) sc.packing.settle = false;
+  const auto t_settle = std::chrono::steady_clock::now();
+  build_packing(*sc.sim, sc.packing);
+  Engine& eng = sc.sim->engine();
+  const double dt = std::min(sc.sim->settings().time_steps.front().dt, eng.max_stable_dt());
+  eng.set_platen(PlatenCommand{});
+  for (long k = 0; k < settle; ++k) eng.step(dt);
+  const double settle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_settle).count();
+  sc.sim->sync_grains();
+  RawScene raw = raw_scene_of(*sc.sim, sc.sim->container(), dt);
+  // The raw world starts from this state; the two are stepped alternately, so the machine's
+  // load falls on both alike.
+  const std::unique_ptr<RawWorld> raw_world = raw_world_for(eng, sc, raw);
+  std::vector<Grain> grains = sc.sim->grains();
+  const StepTimes t = time_steps(eng, raw_world.get(), grains, steps, dt);
   Json j;
   j["benchmark"] = "engine";
   j["engine"] = engine;
@@ -281,19 +305,19 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   j["settle"] = settle < 0 ? Json("scenario packing procedure") : Json(settle);
   j["settle_wall_s"] = settle_s;
   j["steps"] = steps;
-  j["adapter"] = {{"ms_per_step", 1e3 * t_step / steps},
-                  {"readout_ms_per_step", 1e3 * t_read / steps},
-                  {"contacts_per_step", contacts / steps}};
+  j["adapter"] = {{"ms_per_step", 1e3 * t.step / steps},
+                  {"readout_ms_per_step", 1e3 * t.read / steps},
+                  {"contacts_per_step", t.contacts / steps}};
   if (raw_world) {
-    const double raw_ms = 1e3 * t_raw / steps;
-    j["raw"] = {{"ms_per_step", raw_ms}, {"contacts_per_step", raw_contacts / steps}};
-    j["adapter_overhead"] = t_step / t_raw - 1;
-    j["adapter_overhead_with_readout"] = (t_step + t_read) / t_raw - 1;
+    const double raw_ms = 1e3 * t.raw / steps;
+    j["raw"] = {{"ms_per_step", raw_ms}, {"contacts_per_step", t.raw_contacts / steps}};
+    j["adapter_overhead"] = t.step / t.raw - 1;
+    j["adapter_overhead_with_readout"] = (t.step + t.read) / t.raw - 1;
   } else {
     j["raw"] = nullptr;
     j["note"] = engine + " is crumble's own engine: there is no raw library to compare with";
   }
-  j["loop"] = loop_phase(*sc.sim, steps, dt, 1e3 * t_step / steps);
+  j["loop"] = loop_phase(*sc.sim, steps, dt, 1e3 * t.step / steps);
   return j;
 }
 

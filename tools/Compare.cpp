@@ -214,26 +214,36 @@ const std::vector<std::string>& time_breakdown_parts() {
   return parts;
 }
 
-void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
-                      const std::vector<std::string>& expected_levels, const std::vector<std::string>& header) {
-  const auto levels = level_keys(rows, expected_levels);
-  std::vector<std::pair<std::string, std::string>> optional;
+namespace {
+
+using Optional = std::vector<std::pair<std::string, std::string>>;
+
+// The optional figures (kOptional) that some row has.
+Optional present_optional(const std::vector<ComparisonRow>& rows) {
+  Optional optional;
   for (const auto& o : kOptional)
     for (const auto& r : rows)
       if (std::isfinite(num(r.summary, o.first))) {
         optional.push_back(o);
         break;
       }
-  auto part = [](const Json& s, const std::string& k) {
-    return s.is_object() && s.contains("time_breakdown_s") && s["time_breakdown_s"].is_object()
-               ? num(s["time_breakdown_s"], k)
-               : std::nan("");
-  };
-  auto str = [](const Json& s, const std::string& k) {
-    return s.is_object() && s.contains(k) && s[k].is_string() ? s[k].get<std::string>() : std::string();
-  };
+  return optional;
+}
 
-  // comparison.csv: every figure at full precision, SI units, one row per combination.
+// Part k of summary.json `time_breakdown_s`, NaN when there is none.
+double time_part(const Json& s, const std::string& k) {
+  return s.is_object() && s.contains("time_breakdown_s") && s["time_breakdown_s"].is_object()
+             ? num(s["time_breakdown_s"], k)
+             : std::nan("");
+}
+
+std::string str_field(const Json& s, const std::string& k) {
+  return s.is_object() && s.contains(k) && s[k].is_string() ? s[k].get<std::string>() : std::string();
+}
+
+// comparison.csv: every figure at full precision, SI units, one row per combination.
+std::string comparison_csv(const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
+                           const std::vector<std::string>& levels, const Optional& optional) {
   std::ostringstream c;
   c << std::setprecision(10);
   for (const auto& a : axes) c << csv_field(a.path) << ',';
@@ -249,7 +259,7 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
     const Json& s = r.summary;
     for (const auto& [p, v] : r.combination.values) c << csv_field(v) << ',';
     c << csv_field(r.combination.name) << ',' << r.status << ',' << r.exit_status << ',' << csv_field(r.reason) << ','
-      << str(s, "engine") << ',' << str(s, "breakage") << ',' << str(s, "fragments");
+      << str_field(s, "engine") << ',' << str_field(s, "breakage") << ',' << str_field(s, "fragments");
     for (const char* k : {"grains_initial", "grains_final", "breakage_events", "void_ratio_initial"})
       c << ',' << fmt(num(s, k), 10);
     for (const auto& k : levels) c << ',' << fmt(num(s, k), 10);
@@ -258,12 +268,50 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
       c << ',' << fmt(num(s, k), 10);
     for (const auto& o : optional) c << ',' << fmt(num(s, o.first), 10);
     c << ',' << fmt(num(s, "steps"), 12) << ',' << fmt(num(s, "wall_seconds"), 10);
-    for (const auto& p : kTimeParts) c << ',' << fmt(part(s, p), 10);
-    c << ',' << str(s, "packing_hash") << '\n';
+    for (const auto& p : kTimeParts) c << ',' << fmt(time_part(s, p), 10);
+    c << ',' << str_field(s, "packing_hash") << '\n';
   }
-  write_file_atomic(dir + "/comparison.csv", c.str());
+  return c.str();
+}
 
-  // comparison.md: the same rows for a person (MPa, mm, %, seconds).
+// The cells of one row of comparison.md (MPa, mm, %, seconds); a row with a reason gets a
+// numbered note.
+std::vector<std::string> md_row(const ComparisonRow& r, const std::vector<std::string>& levels, const Optional& optional,
+                                std::vector<std::string>& notes) {
+  const Json& s = r.summary;
+  std::vector<std::string> cell;
+  for (const auto& [p, v] : r.combination.values) cell.push_back(v);
+  std::string status = r.status;
+  if (!r.reason.empty()) {
+    notes.push_back(r.combination.label() + ": " + r.status + ": " + r.reason);
+    status += " (" + std::to_string(notes.size()) + ")";
+  }
+  cell.push_back(status);
+  const double gi = num(s, "grains_initial"), gf = num(s, "grains_final");
+  cell.push_back(std::isfinite(gi) ? fmt(gi, 12) + " → " + fmt(gf, 12) : "");
+  cell.push_back(fmt(num(s, "breakage_events"), 12));
+  cell.push_back(fmt(num(s, "void_ratio_initial")));
+  for (const auto& k : levels) cell.push_back(fmt(num(s, k)));
+  cell.push_back(fmt(num(s, "void_ratio_final")));
+  cell.push_back(fmt(num(s, "max_platen_stress_Pa") / 1e6));
+  cell.push_back(fmt(num(s, "psd_d50_final_m") * 1e3));
+  cell.push_back(fmt(num(s, "fines_fraction_final") * 100, 3));
+  for (const auto& o : optional) {
+    const double v = num(s, o.first);
+    const bool pa = o.first.size() > 3 && o.first.compare(o.first.size() - 3, 3, "_Pa") == 0;
+    const bool mm = o.first.size() > 2 && o.first.compare(o.first.size() - 2, 2, "_m") == 0;
+    cell.push_back(fmt(pa ? v / 1e6 : mm ? v * 1e3 : v));
+  }
+  cell.push_back(fmt(num(s, "steps"), 12));
+  cell.push_back(fmt(num(s, "wall_seconds"), 4));
+  for (const auto& p : kTimeParts) cell.push_back(fmt(time_part(s, p), 3));
+  return cell;
+}
+
+// comparison.md: the same rows for a person.
+std::string comparison_md(const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
+                          const std::vector<std::string>& levels, const Optional& optional,
+                          const std::vector<std::string>& header) {
   std::ostringstream m;
   for (const auto& h : header) m << h << "\n";
   if (!header.empty()) m << "\n";
@@ -282,35 +330,8 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
   m << "\n";
   std::vector<std::string> notes;
   for (const auto& r : rows) {
-    const Json& s = r.summary;
-    std::vector<std::string> cell;
-    for (const auto& [p, v] : r.combination.values) cell.push_back(v);
-    std::string status = r.status;
-    if (!r.reason.empty()) {
-      notes.push_back(r.combination.label() + ": " + r.status + ": " + r.reason);
-      status += " (" + std::to_string(notes.size()) + ")";
-    }
-    cell.push_back(status);
-    const double gi = num(s, "grains_initial"), gf = num(s, "grains_final");
-    cell.push_back(std::isfinite(gi) ? fmt(gi, 12) + " → " + fmt(gf, 12) : "");
-    cell.push_back(fmt(num(s, "breakage_events"), 12));
-    cell.push_back(fmt(num(s, "void_ratio_initial")));
-    for (const auto& k : levels) cell.push_back(fmt(num(s, k)));
-    cell.push_back(fmt(num(s, "void_ratio_final")));
-    cell.push_back(fmt(num(s, "max_platen_stress_Pa") / 1e6));
-    cell.push_back(fmt(num(s, "psd_d50_final_m") * 1e3));
-    cell.push_back(fmt(num(s, "fines_fraction_final") * 100, 3));
-    for (const auto& o : optional) {
-      const double v = num(s, o.first);
-      const bool pa = o.first.size() > 3 && o.first.compare(o.first.size() - 3, 3, "_Pa") == 0;
-      const bool mm = o.first.size() > 2 && o.first.compare(o.first.size() - 2, 2, "_m") == 0;
-      cell.push_back(fmt(pa ? v / 1e6 : mm ? v * 1e3 : v));
-    }
-    cell.push_back(fmt(num(s, "steps"), 12));
-    cell.push_back(fmt(num(s, "wall_seconds"), 4));
-    for (const auto& p : kTimeParts) cell.push_back(fmt(part(s, p), 3));
     m << "|";
-    for (const auto& x : cell) m << ' ' << md_cell(x) << " |";
+    for (const auto& x : md_row(r, levels, optional, notes)) m << ' ' << md_cell(x) << " |";
     m << "\n";
   }
   if (!notes.empty()) {
@@ -322,7 +343,17 @@ void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes,
        "fragments and grains finer than `fines_size_m`), `wall s` the run's wall time, then where it went "
        "(summary.json `time_breakdown_s`). Every figure comes from the combination's summary.json; "
        "comparison.csv has them at full precision.\n";
-  write_file_atomic(dir + "/comparison.md", m.str());
+  return m.str();
+}
+
+}  // namespace
+
+void write_comparison(const std::string& dir, const std::vector<VaryAxis>& axes, const std::vector<ComparisonRow>& rows,
+                      const std::vector<std::string>& expected_levels, const std::vector<std::string>& header) {
+  const auto levels = level_keys(rows, expected_levels);
+  const Optional optional = present_optional(rows);
+  write_file_atomic(dir + "/comparison.csv", comparison_csv(axes, rows, levels, optional));
+  write_file_atomic(dir + "/comparison.md", comparison_md(axes, rows, levels, optional, header));
 }
 
 namespace {
@@ -439,25 +470,36 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-}  // namespace
-
-int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
-
-CompareOutcome compare_runs(const CompareRequest& req) {
-  CompareOutcome outcome;
-  const auto t0 = std::chrono::steady_clock::now();
+std::vector<VaryAxis> vary_axes(const CompareRequest& req) {
   if (req.vary.empty()) throw InputError(req.command + ": give at least one --vary path=value1,value2,...");
   if (req.jobs < 1) throw InputError("--jobs: expected at least 1");
   std::vector<VaryAxis> axes;
   for (const auto& v : req.vary) axes.push_back(parse_vary(v));
-  const auto combos = combinations(axes);
+  return axes;
+}
+
+// A path is either fixed (--set) or varied (--vary), never both.
+void check_set_or_varied(const CompareRequest& req, const std::vector<VaryAxis>& axes) {
   for (const auto& a : axes)
     for (const auto& s : req.sets)
       if (s.substr(0, s.find('=')) == a.path)
         throw InputError("--vary " + a.arg + ": '" + a.path + "' is also given by --set " + s +
                          "; a path is either fixed (--set) or varied (--vary)");
+}
 
-  // The base: the scenario with --set; it builds the packing that every combination starts from.
+// With one packing for every combination (`shared`), nothing that builds it may vary.
+void check_packing_fixed(const std::vector<VaryAxis>& axes, bool shared) {
+  if (shared)
+    for (const auto& a : axes)
+      for (const char* p : {"packing", "container", "dimension"})
+        if (a.path == p || a.path.rfind(std::string(p) + ".", 0) == 0)
+          throw InputError("--vary " + a.arg + ": every combination starts from the one packing built from the "
+                           "scenario, so '" + a.path + "' cannot vary; fix it with --set, or run one compare per "
+                           "packing");
+}
+
+// The base: the scenario with --set; it builds the packing that every combination starts from.
+RunRequest base_request(const CompareRequest& req) {
   RunRequest base;
   base.scenario = req.scenario;
   base.source_name = req.source_name;
@@ -465,26 +507,21 @@ CompareOutcome compare_runs(const CompareRequest& req) {
   base.seed = req.seed;
   base.threads = req.threads;
   base.quiet = req.quiet;
-  const Json base_doc = request_document(base);
-  const bool shared_packing = base_doc.is_object() && !base_doc.contains("scene");
-  if (shared_packing)
-    for (const auto& a : axes)
-      for (const char* p : {"packing", "container", "dimension"})
-        if (a.path == p || a.path.rfind(std::string(p) + ".", 0) == 0)
-          throw InputError("--vary " + a.arg + ": every combination starts from the one packing built from the "
-                           "scenario, so '" + a.path + "' cannot vary; fix it with --set, or run one compare per "
-                           "packing");
+  return base;
+}
+
+// The void-ratio levels of the base scenario; a --set or scenario problem is reported as
+// such, not per combination. Then every combination is checked before anything runs (with
+// the scenario's own packing; the shared packing.json holds the same grains).
+std::vector<std::string> check_requests(const CompareRequest& req, const RunRequest& base,
+                                        const std::vector<Combination>& combos) {
   std::vector<std::string> levels;
   {
-    // A --set or scenario problem is reported as such, not per combination.
     const Scenario sc = build_request(base);
     for (double s : sc.output.psd_at_stress) levels.push_back(void_ratio_stress_key(s));
     for (double s : sc.output.psd_at_strain) levels.push_back(void_ratio_strain_key(s));
   }
-
   const std::string flag = req.command == "sweep" ? "--param" : "--vary";
-  // Every combination is checked before anything runs (with the scenario's own packing; the
-  // shared packing.json holds the same grains).
   for (const auto& c : combos) {
     RunRequest r = base;
     for (const auto& s : c.sets()) r.sets.push_back(s);
@@ -496,15 +533,12 @@ CompareOutcome compare_runs(const CompareRequest& req) {
       throw InputError(flag + ": the combination " + c.label() + " is refused by the scenario: " + e.what());
     }
   }
+  return levels;
+}
 
-  std::vector<std::string> folders;
-  for (const auto& c : combos) folders.push_back(c.name);
-  folders.push_back("packing");
-  prepare_compare_out(req.out, req.force, folders);
-  const fs::path dir(req.out);
-  const fs::path logs = dir / "logs";
-  install_stop_signals();
-
+// The first lines of comparison.md: what was compared, and how.
+std::vector<std::string> compare_header(const CompareRequest& req, const Json& base_doc,
+                                        const std::vector<VaryAxis>& axes, std::size_t combos) {
   std::vector<std::string> header;
   header.push_back("# crumble " + req.command + ": " + (base_doc.is_object() ? base_doc.value("name", std::string("scenario")) : "") +
                    " (" + req.source_name + ")");
@@ -516,64 +550,92 @@ CompareOutcome compare_runs(const CompareRequest& req) {
     return s;
   }() + ";";
   for (const auto& s : req.sets) how += " `--set " + s + "`;";
-  header.push_back(how + " " + std::to_string(combos.size()) + " combinations, " + std::to_string(req.jobs) +
+  header.push_back(how + " " + std::to_string(combos) + " combinations, " + std::to_string(req.jobs) +
                    " at a time" + (req.threads ? ", " + std::to_string(*req.threads) + (*req.threads == 1 ? " thread" : " threads") + " each" : "") + ".");
+  return header;
+}
 
-  // 1. The packing, once (each combination loads DIR/packing.json, no settling of its own).
-  std::optional<std::string> packing_file;
-  std::string packing_hash;
-  if (shared_packing) {
-    RunRequest p = base;
-    p.out = (dir / "packing").string();
-    p.force = req.force;
-    p.packing_only = true;
-    p.quiet = false;
-    if (!req.quiet) std::cerr << "crumble: " << req.command << ": building the packing (log " << (logs / "packing.log").string() << ")\n";
-    const pid_t pid = spawn(p, (logs / "packing.log").string());
-    int st = 0;
-    while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
-    }
-    const int code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
-    if (code != 0) {
-      const std::string why = reason_from_log((logs / "packing.log").string());
-      std::cerr << "crumble: " << req.command << ": the packing stage ended with status " << code
-                << (why.empty() ? "" : ": " + why) << " (log " << (logs / "packing.log").string() << ")\n";
-      outcome.axes = axes;
-      outcome.status = code == 130 || code == 143 ? code : code == 2 ? 2 : 1;
-      return outcome;
-    }
-    fs::copy_file(dir / "packing" / "packing.json", dir / "packing.json", fs::copy_options::overwrite_existing);
-    packing_file = fs::absolute(dir / "packing.json").string();
-    packing_hash = file_sha256(*packing_file);
-    const Json ps = read_summary(dir / "packing" / "summary.json");
-    header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
-                     (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
-                     fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
-                     " s); every combination starts from packing.json, SHA-256 " + packing_hash + ".");
-  } else {
-    header.push_back("Packing: the scenario's scene builds it in each combination (same seed, same grains; "
-                     "compare packing_hash in comparison.csv).");
+// The packing, once, in DIR/packing (each combination loads DIR/packing.json, no settling of
+// its own). Returns the stage's exit status; on success sets the packing file and hash and
+// adds a line to the header.
+int build_shared_packing(const CompareRequest& req, const RunRequest& base, const fs::path& dir,
+                         std::optional<std::string>& packing_file, std::string& packing_hash,
+                         std::vector<std::string>& header) {
+  const fs::path logs = dir / "logs";
+  RunRequest p = base;
+  p.out = (dir / "packing").string();
+  p.force = req.force;
+  p.packing_only = true;
+  p.quiet = false;
+  if (!req.quiet) std::cerr << "crumble: " << req.command << ": building the packing (log " << (logs / "packing.log").string() << ")\n";
+  const pid_t pid = spawn(p, (logs / "packing.log").string());
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
   }
+  const int code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
+  if (code != 0) {
+    const std::string why = reason_from_log((logs / "packing.log").string());
+    std::cerr << "crumble: " << req.command << ": the packing stage ended with status " << code
+              << (why.empty() ? "" : ": " + why) << " (log " << (logs / "packing.log").string() << ")\n";
+    return code;
+  }
+  fs::copy_file(dir / "packing" / "packing.json", dir / "packing.json", fs::copy_options::overwrite_existing);
+  packing_file = fs::absolute(dir / "packing.json").string();
+  packing_hash = file_sha256(*packing_file);
+  const Json ps = read_summary(dir / "packing" / "summary.json");
+  header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
+                   (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
+                   fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
+                   " s); every combination starts from packing.json, SHA-256 " + packing_hash + ".");
+  return 0;
+}
 
-  // 2. The combinations, `jobs` at a time.
-  std::vector<ComparisonRow> rows(combos.size());
-  for (std::size_t i = 0; i < combos.size(); ++i) rows[i].combination = combos[i];
+// A finished run's row: its status from the wait status `st`, its peak memory, the reason
+// it did not end well (from its log) and its summary.json.
+void finish_row(ComparisonRow& row, int st, const struct rusage& ru, const fs::path& dir) {
+  row.exit_status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
+  row.status = status_word(row.exit_status);
+  row.peak_rss_bytes = 1024.0 * static_cast<double>(ru.ru_maxrss);  // Linux: kilobytes
+  const std::string log = (dir / "logs" / (row.combination.name + ".log")).string();
+  if (row.exit_status != 0) {
+    row.reason = WIFSIGNALED(st) ? "the run was killed by signal " + std::to_string(WTERMSIG(st))
+                                 : reason_from_log(log);
+    if (row.reason.empty()) row.reason = "exit status " + std::to_string(row.exit_status) + " (see " + log + ")";
+  }
+  row.summary = read_summary(dir / row.combination.name / "summary.json");
+  if (row.exit_status == 0 && !row.summary.is_object()) {
+    row.status = "failed";
+    row.exit_status = 1;
+    row.reason = "no summary.json";
+  }
+}
+
+// Runs combination i in its folder DIR/<name> (log in DIR/logs).
+pid_t start_combination(const CompareRequest& req, const RunRequest& base, const std::vector<Combination>& combos,
+                        std::size_t i, const fs::path& dir, const std::optional<std::string>& packing_file) {
+  RunRequest r = base;
+  for (const auto& s : combos[i].sets()) r.sets.push_back(s);
+  r.out = (dir / combos[i].name).string();
+  r.force = req.force;
+  r.packing_file = packing_file;
+  const std::string log = (dir / "logs" / (combos[i].name + ".log")).string();
+  if (!req.quiet)
+    std::cerr << "crumble: " << req.command << ": [" << i + 1 << "/" << combos.size() << "] " << combos[i].label()
+              << " started (log " << log << ")\n";
+  return spawn(r, log);
+}
+
+// The combinations, `jobs` at a time; a stop request is forwarded to the running ones.
+void run_combinations(const CompareRequest& req, const RunRequest& base, const std::vector<Combination>& combos,
+                      const fs::path& dir, const std::optional<std::string>& packing_file,
+                      std::vector<ComparisonRow>& rows) {
   std::map<pid_t, std::size_t> running;
   std::map<pid_t, std::chrono::steady_clock::time_point> started;
   std::size_t next = 0;
   bool forwarded = false;
   while (next < combos.size() || !running.empty()) {
     while (!stop_requested() && next < combos.size() && static_cast<int>(running.size()) < req.jobs) {
-      RunRequest r = base;
-      for (const auto& s : combos[next].sets()) r.sets.push_back(s);
-      r.out = (dir / combos[next].name).string();
-      r.force = req.force;
-      r.packing_file = packing_file;
-      const std::string log = (logs / (combos[next].name + ".log")).string();
-      if (!req.quiet)
-        std::cerr << "crumble: " << req.command << ": [" << next + 1 << "/" << combos.size() << "] " << combos[next].label()
-                  << " started (log " << log << ")\n";
-      const pid_t pid = spawn(r, log);
+      const pid_t pid = start_combination(req, base, combos, next, dir, packing_file);
       running[pid] = next;
       started[pid] = std::chrono::steady_clock::now();
       ++next;
@@ -595,21 +657,7 @@ CompareOutcome compare_runs(const CompareRequest& req) {
     auto it = running.find(pid);
     if (it == running.end()) continue;
     ComparisonRow& row = rows[it->second];
-    row.exit_status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
-    row.status = status_word(row.exit_status);
-    row.peak_rss_bytes = 1024.0 * static_cast<double>(ru.ru_maxrss);  // Linux: kilobytes
-    const std::string log = (logs / (row.combination.name + ".log")).string();
-    if (row.exit_status != 0) {
-      row.reason = WIFSIGNALED(st) ? "the run was killed by signal " + std::to_string(WTERMSIG(st))
-                                   : reason_from_log(log);
-      if (row.reason.empty()) row.reason = "exit status " + std::to_string(row.exit_status) + " (see " + log + ")";
-    }
-    row.summary = read_summary(dir / row.combination.name / "summary.json");
-    if (row.exit_status == 0 && !row.summary.is_object()) {
-      row.status = "failed";
-      row.exit_status = 1;
-      row.reason = "no summary.json";
-    }
+    finish_row(row, st, ru, dir);
     if (!req.quiet)
       std::cerr << "crumble: " << req.command << ": " << row.combination.label() << ": " << row.status << " after "
                 << fmt(seconds_since(started[pid]), 3) << " s" << (row.reason.empty() ? "" : ": " + row.reason)
@@ -618,15 +666,48 @@ CompareOutcome compare_runs(const CompareRequest& req) {
   }
   for (auto& r : rows)
     if (r.exit_status < 0) r.reason = "not started: the comparison was interrupted";
+}
 
+}  // namespace
+
+int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
+
+CompareOutcome compare_runs(const CompareRequest& req) {
+  CompareOutcome outcome;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<VaryAxis> axes = vary_axes(req);
+  const auto combos = combinations(axes);
+  check_set_or_varied(req, axes);
+  const RunRequest base = base_request(req);
+  const Json base_doc = request_document(base);
+  const bool shared_packing = base_doc.is_object() && !base_doc.contains("scene");
+  check_packing_fixed(axes, shared_packing);
+  const std::vector<std::string> levels = check_requests(req, base, combos);
+  std::vector<std::string> folders;
+  for (const auto& c : combos) folders.push_back(c.name);
+  folders.push_back("packing");
+  prepare_compare_out(req.out, req.force, folders);
+  const fs::path dir(req.out);
+  install_stop_signals();
+  std::vector<std::string> header = compare_header(req, base_doc, axes, combos.size());
+  outcome.axes = axes;
+  std::optional<std::string> packing_file;
+  if (!shared_packing) {
+    header.push_back("Packing: the scenario's scene builds it in each combination (same seed, same grains; "
+                     "compare packing_hash in comparison.csv).");
+  } else if (const int code = build_shared_packing(req, base, dir, packing_file, outcome.packing_hash, header); code != 0) {
+    outcome.status = code == 130 || code == 143 ? code : code == 2 ? 2 : 1;
+    return outcome;
+  }
+  std::vector<ComparisonRow> rows(combos.size());
+  for (std::size_t i = 0; i < combos.size(); ++i) rows[i].combination = combos[i];
+  run_combinations(req, base, combos, dir, packing_file, rows);
   header.push_back("Wall time of the whole comparison: " + fmt(seconds_since(t0), 4) + " s.");
   write_comparison(dir.string(), axes, rows, levels, header);
   if (!req.quiet)
     std::cerr << "crumble: " << req.command << ": " << combos.size() << " combinations in " << fmt(seconds_since(t0), 4)
               << " s; table in " << (dir / "comparison.md").string() << "\n";
-  outcome.axes = axes;
   outcome.rows = rows;
-  outcome.packing_hash = packing_hash;
   if (stop_requested()) {
     outcome.status = interrupted_status();
     return outcome;

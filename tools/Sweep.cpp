@@ -59,11 +59,14 @@ std::string trim(const std::string& s) {
   return s.substr(a, s.find_last_not_of(" \t") - a + 1);
 }
 
-}  // namespace
+std::string joined_values(const VaryAxis& a) {
+  std::string s;
+  for (const auto& v : a.values) s += (s.empty() ? "" : ", ") + v;
+  return s;
+}
 
-int run_sweep(const SweepRequest& req) {
-  const auto t0 = std::chrono::steady_clock::now();
-  // 1. Arguments, all checked before anything runs.
+// The --param/--values pairs as --vary arguments, and their axes.
+std::vector<VaryAxis> sweep_axes(const SweepRequest& req, std::vector<std::string>& vary) {
   if (req.params.empty()) throw InputError("sweep: give at least one --param PATH --values a,b,c");
   if (req.values.size() != req.params.size())
     throw InputError("sweep: " + std::to_string(req.params.size()) + " --param but " +
@@ -74,7 +77,6 @@ int run_sweep(const SweepRequest& req) {
                      std::to_string(req.params.size()) +
                      " --param; give one reference value per --param, in the same order, or none (the last value of "
                      "each)");
-  std::vector<std::string> vary;
   std::vector<VaryAxis> axes;
   for (std::size_t i = 0; i < req.params.size(); ++i) {
     const std::string p = trim(req.params[i]);
@@ -90,26 +92,34 @@ int run_sweep(const SweepRequest& req) {
       throw InputError("--param " + p + " --values '" + req.values[i] + "': " + e.what());
     }
   }
+  return axes;
+}
+
+// The reference setting: --reference, or the last value of each --param.
+std::vector<std::string> reference_values(const SweepRequest& req, const std::vector<VaryAxis>& axes) {
   std::vector<std::string> ref_values;
   for (std::size_t i = 0; i < axes.size(); ++i) {
     const std::string r = req.reference.empty() ? axes[i].values.back() : trim(req.reference[i]);
     if (std::find(axes[i].values.begin(), axes[i].values.end(), r) == axes[i].values.end())
       throw InputError("--reference " + r + ": not among the --values of --param " + axes[i].path + " (" +
-                       [&] {
-                         std::string s;
-                         for (const auto& v : axes[i].values) s += (s.empty() ? "" : ", ") + v;
-                         return s;
-                       }() + ")");
+                       joined_values(axes[i]) + ")");
     ref_values.push_back(r);
   }
+  return ref_values;
+}
+
+// The --metric choices, each once.
+std::vector<Metric> chosen_metrics(const SweepRequest& req) {
   std::vector<Metric> chosen;
   for (const auto& m : req.metrics) {
     Metric x = find_metric(trim(m), "--metric " + m);
     if (std::none_of(chosen.begin(), chosen.end(), [&](const Metric& c) { return c.name == x.name; }))
       chosen.push_back(x);
   }
+  return chosen;
+}
 
-  // 2. Every setting, from one packing (compare_runs checks every combination first).
+CompareRequest sweep_compare_request(const SweepRequest& req, const std::vector<std::string>& vary) {
   CompareRequest cr;
   cr.scenario = req.scenario;
   cr.source_name = req.source_name;
@@ -122,53 +132,78 @@ int run_sweep(const SweepRequest& req) {
   cr.force = req.force;
   cr.quiet = req.quiet;
   cr.command = "sweep";
-  CompareOutcome run = compare_runs(cr);
-  if (run.rows.empty()) return run.status;  // the packing stage failed: nothing to compare
+  return cr;
+}
 
-  // 3. Metrics of every setting against the reference.
-  const fs::path dir(req.out);
-  std::size_t ref = run.rows.size();
-  for (std::size_t i = 0; i < run.rows.size(); ++i) {
+// Every setting's metrics against the reference: values, relative errors, the largest of
+// them (error), the wall time (cost) and the error–cost front.
+struct SweepTable {
+  std::size_t ref = 0;  // the reference's row (rows.size(): none)
+  bool ref_ok = false, default_metrics = false;
+  std::vector<Metric> chosen;
+  std::vector<std::vector<std::optional<double>>> value, rel;
+  std::vector<double> error, cost;
+  std::vector<bool> front;
+  std::vector<std::string> notes;
+};
+
+// Notes on the metrics that do not count: the reference has no value, or 0.
+void reference_notes(SweepTable& t, const RunOutputs& ref) {
+  for (const auto& m : t.chosen) {
+    const auto rv = m.value(ref, m.name);
+    if (!rv) t.notes.push_back("`" + m.name + "`: the reference run has no value; it does not count.");
+    else if (*rv == 0) t.notes.push_back("`" + m.name + "`: the reference value is 0, a relative error is undefined; it does not count.");
+  }
+}
+
+// Row i's metric values, relative errors and error.
+void row_errors(SweepTable& t, std::size_t i, const ComparisonRow& row, const std::vector<RunOutputs>& outputs) {
+  const bool ok = row.status == "ok";
+  if (ok) t.cost[i] = num(row.summary, "wall_seconds");
+  double e = 0;
+  bool any = false;
+  for (std::size_t k = 0; k < t.chosen.size(); ++k) {
+    t.value[i][k] = t.chosen[k].value(outputs[i], t.chosen[k].name);
+    if (!t.ref_ok) continue;
+    const auto rv = t.chosen[k].value(outputs[t.ref], t.chosen[k].name);
+    if (!rv || *rv == 0) continue;  // does not count (noted above)
+    t.rel[i][k] = relative_error(t.value[i][k], rv);
+    any = true;
+    // A figure the reference has and this setting never reached: no finite error.
+    e = std::max(e, t.rel[i][k] ? *t.rel[i][k] : std::numeric_limits<double>::infinity());
+  }
+  if (ok && t.ref_ok && any) t.error[i] = e;
+}
+
+SweepTable sweep_table(const CompareOutcome& run, const fs::path& dir, const std::vector<std::string>& ref_values,
+                       std::vector<Metric> chosen) {
+  SweepTable t;
+  const std::size_t n = run.rows.size();
+  t.ref = n;
+  for (std::size_t i = 0; i < n; ++i) {
     std::vector<std::string> v;
     for (const auto& pv : run.rows[i].combination.values) v.push_back(pv.second);
-    if (v == ref_values) ref = i;
+    if (v == ref_values) t.ref = i;
   }
   std::vector<RunOutputs> outputs;
   for (const auto& r : run.rows) outputs.push_back(read_run_outputs((dir / r.combination.name).string()));
-  const bool ref_ok = ref < run.rows.size() && run.rows[ref].status == "ok";
-  const bool default_metrics = chosen.empty();
-  if (default_metrics && ref_ok) chosen = available_metrics(outputs[ref]);
-  const std::size_t n = run.rows.size(), nm = chosen.size();
-  std::vector<std::vector<std::optional<double>>> value(n, std::vector<std::optional<double>>(nm));
-  std::vector<std::vector<std::optional<double>>> rel(n, std::vector<std::optional<double>>(nm));
-  std::vector<double> error(n, std::nan("")), cost(n, std::nan(""));
-  std::vector<std::string> notes;
-  for (std::size_t k = 0; k < nm; ++k) {
-    if (!ref_ok) break;
-    const auto rv = chosen[k].value(outputs[ref], chosen[k].name);
-    if (!rv) notes.push_back("`" + chosen[k].name + "`: the reference run has no value; it does not count.");
-    else if (*rv == 0) notes.push_back("`" + chosen[k].name + "`: the reference value is 0, a relative error is undefined; it does not count.");
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    const bool ok = run.rows[i].status == "ok";
-    if (ok) cost[i] = num(run.rows[i].summary, "wall_seconds");
-    double e = 0;
-    bool any = false;
-    for (std::size_t k = 0; k < nm; ++k) {
-      value[i][k] = chosen[k].value(outputs[i], chosen[k].name);
-      if (!ref_ok) continue;
-      const auto rv = chosen[k].value(outputs[ref], chosen[k].name);
-      if (!rv || *rv == 0) continue;  // does not count (noted above)
-      rel[i][k] = relative_error(value[i][k], rv);
-      any = true;
-      // A figure the reference has and this setting never reached: no finite error.
-      e = std::max(e, rel[i][k] ? *rel[i][k] : std::numeric_limits<double>::infinity());
-    }
-    if (ok && ref_ok && any) error[i] = e;
-  }
-  const auto front = pareto_front(cost, error);
+  t.ref_ok = t.ref < n && run.rows[t.ref].status == "ok";
+  t.default_metrics = chosen.empty();
+  if (t.default_metrics && t.ref_ok) chosen = available_metrics(outputs[t.ref]);
+  t.chosen = std::move(chosen);
+  const std::size_t nm = t.chosen.size();
+  t.value.assign(n, std::vector<std::optional<double>>(nm));
+  t.rel.assign(n, std::vector<std::optional<double>>(nm));
+  t.error.assign(n, std::nan(""));
+  t.cost.assign(n, std::nan(""));
+  if (t.ref_ok) reference_notes(t, outputs[t.ref]);
+  for (std::size_t i = 0; i < n; ++i) row_errors(t, i, run.rows[i], outputs);
+  t.front = pareto_front(t.cost, t.error);
+  return t;
+}
 
-  // 4. sweep.csv: full precision, SI units.
+// sweep.csv: full precision, SI units.
+std::string sweep_csv(const std::vector<VaryAxis>& axes, const CompareOutcome& run, const SweepTable& t) {
   const auto& parts = time_breakdown_parts();
   std::ostringstream c;
   c << std::setprecision(10);
@@ -176,23 +211,26 @@ int run_sweep(const SweepRequest& req) {
   c << "folder,status,exit_status,reason,reference,wall_seconds";
   for (const auto& p : parts) c << ",time_" << p << "_s";
   c << ",peak_rss_bytes";
-  for (const auto& m : chosen) c << ',' << column(m) << ',' << m.name << "_rel_error";
+  for (const auto& m : t.chosen) c << ',' << column(m) << ',' << m.name << "_rel_error";
   c << ",error,on_front\n";
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < run.rows.size(); ++i) {
     const auto& r = run.rows[i];
     for (const auto& pv : r.combination.values) c << csv_field(pv.second) << ',';
     c << csv_field(r.combination.name) << ',' << r.status << ',' << r.exit_status << ',' << csv_field(r.reason) << ','
-      << (i == ref ? 1 : 0) << ',' << fmt(num(r.summary, "wall_seconds"), 10);
+      << (i == t.ref ? 1 : 0) << ',' << fmt(num(r.summary, "wall_seconds"), 10);
     for (const auto& p : parts) c << ',' << fmt(part(r.summary, p), 10);
     c << ',' << (r.peak_rss_bytes > 0 ? fmt(r.peak_rss_bytes, 12) : "");
-    for (std::size_t k = 0; k < nm; ++k)
-      c << ',' << (value[i][k] ? fmt(*value[i][k], 10) : "") << ',' << (rel[i][k] ? fmt(*rel[i][k], 10) : "");
-    c << ',' << fmt(error[i], 10) << ',' << (front[i] ? 1 : 0) << '\n';
+    for (std::size_t k = 0; k < t.chosen.size(); ++k)
+      c << ',' << (t.value[i][k] ? fmt(*t.value[i][k], 10) : "") << ',' << (t.rel[i][k] ? fmt(*t.rel[i][k], 10) : "");
+    c << ',' << fmt(t.error[i], 10) << ',' << (t.front[i] ? 1 : 0) << '\n';
   }
-  write_file_atomic((dir / "sweep.csv").string(), c.str());
+  return c.str();
+}
 
-  // 5. pareto.md: the same for a person, the front marked.
-  std::ostringstream m;
+// pareto.md's opening: what was swept, the reference, the metrics and how the error is read.
+void pareto_intro(std::ostream& m, const SweepRequest& req, const std::vector<VaryAxis>& axes,
+                  const std::vector<std::string>& ref_values, const CompareOutcome& run, const SweepTable& t) {
+  const std::size_t n = run.rows.size(), nm = t.chosen.size();
   const std::string name = req.scenario.is_object() ? req.scenario.value("name", std::string("scenario")) : "scenario";
   m << "# crumble sweep: " << name << " (" << req.source_name << ")\n\n";
   std::string how;
@@ -207,68 +245,107 @@ int run_sweep(const SweepRequest& req) {
   m << "\n\nReference: ";
   for (std::size_t i = 0; i < axes.size(); ++i) m << (i ? ", " : "") << "`" << axes[i].path << "` = " << ref_values[i];
   m << (req.reference.empty() ? " (the last value given of each --param, taken as the finest)" : " (--reference)");
-  if (!ref_ok)
-    m << ". **The reference run did not finish (" << (ref < n ? run.rows[ref].status + ": " + run.rows[ref].reason : "")
+  if (!t.ref_ok)
+    m << ". **The reference run did not finish (" << (t.ref < n ? run.rows[t.ref].status + ": " + run.rows[t.ref].reason : "")
       << "): no errors.**";
-  m << "\n\nMetrics" << (default_metrics ? " (every one the reference run reports; choose with --metric)" : "")
+  m << "\n\nMetrics" << (t.default_metrics ? " (every one the reference run reports; choose with --metric)" : "")
     << ": ";
-  for (std::size_t k = 0; k < nm; ++k) m << (k ? ", " : "") << "`" << chosen[k].name << "` (" << chosen[k].unit << ")";
+  for (std::size_t k = 0; k < nm; ++k) m << (k ? ", " : "") << "`" << t.chosen[k].name << "` (" << t.chosen[k].unit << ")";
   if (nm == 0) m << "none";
   m << ".\n\n";
   m << "Error = the largest relative error |x − x_ref| / |x_ref| over the metrics; cost = the run's wall time "
        "(summary.json `wall_seconds`). A setting is on the front (✓) when no other setting has both lower-or-equal "
        "cost and lower-or-equal error, one of them strictly lower.\n\n";
+}
+
+// The cells of row i of pareto.md; a row with a reason gets a numbered note.
+std::vector<std::string> pareto_row(const ComparisonRow& r, std::size_t i, const SweepTable& t,
+                                    std::vector<std::string>& notes) {
+  std::vector<std::string> cell;
+  for (const auto& pv : r.combination.values) cell.push_back(pv.second);
+  std::string st = r.status + (i == t.ref ? " (reference)" : "");
+  if (!r.reason.empty()) {
+    notes.push_back(r.combination.label() + ": " + r.status + ": " + r.reason);
+    st += " (" + std::to_string(notes.size()) + ")";
+  }
+  cell.push_back(st);
+  cell.push_back(t.front[i] ? "✓" : "");
+  cell.push_back(std::isnan(t.error[i]) ? "" : std::isinf(t.error[i]) ? "not reached" : fmt(100 * t.error[i], 3));
+  cell.push_back(fmt(num(r.summary, "wall_seconds"), 4));
+  for (std::size_t k = 0; k < t.chosen.size(); ++k) {
+    cell.push_back(t.value[i][k] ? fmt(*t.value[i][k], 5) : "");
+    cell.push_back(t.rel[i][k] ? fmt(100 * *t.rel[i][k], 3) : "");
+  }
+  for (const auto& p : time_breakdown_parts()) cell.push_back(fmt(part(r.summary, p), 3));
+  cell.push_back(r.peak_rss_bytes > 0 ? fmt(r.peak_rss_bytes / (1024.0 * 1024.0), 4) : "");
+  return cell;
+}
+
+// pareto.md's table, one row per setting, the front marked.
+void pareto_table(std::ostream& m, const std::vector<VaryAxis>& axes, const CompareOutcome& run, const SweepTable& t,
+                  std::vector<std::string>& notes) {
   std::vector<std::string> cols;
   for (const auto& a : axes) cols.push_back(a.path);
   cols.insert(cols.end(), {"status", "front", "error %", "wall s"});
-  for (const auto& k : chosen) {
+  for (const auto& k : t.chosen) {
     cols.push_back(k.name + (k.unit == "1" ? "" : " " + k.unit));
     cols.push_back("err %");
   }
-  for (const auto& p : parts) cols.push_back(p + " s");
+  for (const auto& p : time_breakdown_parts()) cols.push_back(p + " s");
   cols.push_back("peak MiB");
   m << "|";
   for (const auto& h : cols) m << ' ' << h << " |";
   m << "\n|";
   for (std::size_t i = 0; i < cols.size(); ++i) m << "---|";
   m << "\n";
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& r = run.rows[i];
-    std::vector<std::string> cell;
-    for (const auto& pv : r.combination.values) cell.push_back(pv.second);
-    std::string st = r.status + (i == ref ? " (reference)" : "");
-    if (!r.reason.empty()) {
-      notes.push_back(r.combination.label() + ": " + r.status + ": " + r.reason);
-      st += " (" + std::to_string(notes.size()) + ")";
-    }
-    cell.push_back(st);
-    cell.push_back(front[i] ? "✓" : "");
-    cell.push_back(std::isnan(error[i]) ? "" : std::isinf(error[i]) ? "not reached" : fmt(100 * error[i], 3));
-    cell.push_back(fmt(num(r.summary, "wall_seconds"), 4));
-    for (std::size_t k = 0; k < nm; ++k) {
-      cell.push_back(value[i][k] ? fmt(*value[i][k], 5) : "");
-      cell.push_back(rel[i][k] ? fmt(100 * *rel[i][k], 3) : "");
-    }
-    for (const auto& p : parts) cell.push_back(fmt(part(r.summary, p), 3));
-    cell.push_back(r.peak_rss_bytes > 0 ? fmt(r.peak_rss_bytes / (1024.0 * 1024.0), 4) : "");
+  for (std::size_t i = 0; i < run.rows.size(); ++i) {
     m << "|";
-    for (const auto& x : cell) m << ' ' << md_cell(x) << " |";
+    for (const auto& x : pareto_row(run.rows[i], i, t, notes)) m << ' ' << md_cell(x) << " |";
     m << "\n";
   }
-  // The front by cost: what a user picks from.
+}
+
+// The front by cost: what a user picks from.
+void pareto_front_line(std::ostream& m, const CompareOutcome& run, const SweepTable& t) {
   std::vector<std::size_t> on;
-  for (std::size_t i = 0; i < n; ++i)
-    if (front[i]) on.push_back(i);
-  std::sort(on.begin(), on.end(), [&](std::size_t a, std::size_t b) { return cost[a] < cost[b]; });
+  for (std::size_t i = 0; i < run.rows.size(); ++i)
+    if (t.front[i]) on.push_back(i);
+  std::sort(on.begin(), on.end(), [&](std::size_t a, std::size_t b) { return t.cost[a] < t.cost[b]; });
   m << "\nFront, cheapest first:";
   if (on.empty()) m << " none (no setting and reference finished with a metric to compare).";
   for (std::size_t j = 0; j < on.size(); ++j)
-    m << (j ? ";" : "") << " " << run.rows[on[j]].combination.label() << " (" << fmt(cost[on[j]], 3) << " s, error "
-      << fmt(100 * error[on[j]], 3) << " %)";
+    m << (j ? ";" : "") << " " << run.rows[on[j]].combination.label() << " (" << fmt(t.cost[on[j]], 3) << " s, error "
+      << fmt(100 * t.error[on[j]], 3) << " %)";
   m << "\n";
-  if (!notes.empty()) {
+}
+
+}  // namespace
+
+int run_sweep(const SweepRequest& req) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // 1. Arguments, all checked before anything runs.
+  std::vector<std::string> vary;
+  const std::vector<VaryAxis> axes = sweep_axes(req, vary);
+  const std::vector<std::string> ref_values = reference_values(req, axes);
+  std::vector<Metric> chosen = chosen_metrics(req);
+
+  // 2. Every setting, from one packing (compare_runs checks every combination first).
+  CompareOutcome run = compare_runs(sweep_compare_request(req, vary));
+  if (run.rows.empty()) return run.status;  // the packing stage failed: nothing to compare
+
+  // 3. Metrics of every setting against the reference; 4. sweep.csv.
+  const fs::path dir(req.out);
+  SweepTable t = sweep_table(run, dir, ref_values, std::move(chosen));
+  write_file_atomic((dir / "sweep.csv").string(), sweep_csv(axes, run, t));
+
+  // 5. pareto.md: the same for a person, the front marked.
+  std::ostringstream m;
+  pareto_intro(m, req, axes, ref_values, run, t);
+  pareto_table(m, axes, run, t, t.notes);
+  pareto_front_line(m, run, t);
+  if (!t.notes.empty()) {
     m << "\n";
-    for (std::size_t i = 0; i < notes.size(); ++i) m << "(" << i + 1 << ") " << notes[i] << "\n";
+    for (std::size_t i = 0; i < t.notes.size(); ++i) m << "(" << i + 1 << ") " << t.notes[i] << "\n";
   }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   m << "\nEvery setting starts from the same packing (" << (run.packing_hash.empty() ? "built by the scenario's scene in each run; see packing_hash in comparison.csv" : "packing.json, SHA-256 " + run.packing_hash)
@@ -277,9 +354,9 @@ int run_sweep(const SweepRequest& req) {
        "sweep: "
     << fmt(total, 4) << " s.\n";
   write_file_atomic((dir / "pareto.md").string(), m.str());
-  if (!req.quiet) std::cerr << "crumble: sweep: " << n << " settings in " << fmt(total, 4) << " s; front in " << (dir / "pareto.md").string() << "\n";
+  if (!req.quiet) std::cerr << "crumble: sweep: " << run.rows.size() << " settings in " << fmt(total, 4) << " s; front in " << (dir / "pareto.md").string() << "\n";
   if (run.status != 0) return run.status;
-  return ref_ok ? 0 : 1;
+  return t.ref_ok ? 0 : 1;
 }
 
 namespace {

@@ -1,9 +1,8 @@
-// Bullet adapter. Units: Bullet sees lengths multiplied by `scale_` (so a grain is about
-// one unit: Bullet's tolerances are absolute lengths tuned for ~1-unit objects),
-// seconds and kilograms. Hence internal velocity = scale·v, force and impulse =
-// scale·(SI), inertia = scale²·(SI); every value leaves through to_si()/from the same
-// factors. With the automatic scale a power of two, these conversions are exact.
+// Bullet adapter: Bullet's bodies, shapes, solver and contact read-out under the shared
+// rules of backends/rigid/RigidWorld.h (units: Bullet sees lengths × scale, seconds and
+// kilograms; impulses leave through force_si() and the same factors).
 #include "backends/bullet/BulletEngine.h"
+#include "backends/rigid/RigidWorld.h"
 #include "base/Format.h"
 
 #include <btBulletDynamicsCommon.h>
@@ -19,7 +18,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "geometry/SymmetricEigen.h"
 #include "geometry/ConvexHull.h"
 #include "geometry/ConvexPieces.h"
 #include "core/Platen.h"
@@ -96,16 +94,12 @@ Vec3 vec(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 btQuaternion bt(const Quat& q) { return {q.x, q.y, q.z, q.w}; }
 Quat quat(const btQuaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
 
-// Bullet data shared by every grain of one Shape.
-struct ShapeEntry {
-  Shape::Ptr shape;
+// Bullet data shared by every grain of one Shape; the body lives in its principal frame.
+struct ShapeEntry : RigidShapeEntry {
   // A concave polyhedron's convex pieces (btCompoundShape children; declared before
   // `collision` so the compound goes first).
   std::vector<std::unique_ptr<btConvexHullShape>> pieces;
   std::unique_ptr<btCollisionShape> collision;
-  Quat principal;         // principal frame → shape frame
-  Vec3 centroid;          // shape frame (≈ 0 by Shape's invariant)
-  Vec3 moments;           // principal moments per unit density (SI, m⁵)
 };
 
 // Bullet's PGS solver with an early exit on Zhu & Zhao's measure of convergence (Zhu & Zhao
@@ -125,7 +119,7 @@ class ToleranceSolver : public btSequentialImpulseConstraintSolver {
   double deep_erp = 0;
 
   // Contact points deeper than deep_depth take deep_erp as their own β (Bullet's per-point
-  // ERP); with the split impulse on (see fix_scale) their correction adds no velocity.
+  // ERP); with the split impulse on (see scale_fixed) their correction adds no velocity.
   btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds,
                                         int numManifolds, btTypedConstraint** constraints, int numConstraints,
                                         const btContactSolverInfo& info, btIDebugDraw* debug) override {
@@ -241,16 +235,10 @@ struct WallBody {
   std::unique_ptr<btRigidBody> body;
 };
 
-void require_finite(const Vec3& v, const char* what, GrainId id) {
-  if (!is_finite(v))
-    throw std::invalid_argument("bullet: grain " + std::to_string(id) + " has a non-finite " + what);
-}
-
 }  // namespace
 
-struct BulletEngine::Impl {
+struct BulletEngine::Impl final : RigidWorld {
   Options opt;
-  EngineContext ctx;
 
   std::unique_ptr<btDefaultCollisionConfiguration> config;
   std::unique_ptr<btCollisionDispatcher> dispatcher;
@@ -258,41 +246,25 @@ struct BulletEngine::Impl {
   std::unique_ptr<ToleranceSolver> solver;
   std::unique_ptr<btDiscreteDynamicsWorld> world;
 
-  double scale = 0;      // internal units per metre; 0 until fixed
-  double ref_length = 0; // internal length of the reference grain (≈ 1)
-
-  bool have_container = false;
-  Container container;
   std::vector<std::unique_ptr<WallBody>> walls;  // floor, x-, x+, y-, y+ (static planes)
+  // Under a force command Bullet integrates the platen as a dynamic body (implicitly
+  // coupled to the contacts by the solver) and the driver is synced to it.
   std::unique_ptr<WallBody> platen;
-  double platen_half_thickness = 0;  // internal
-  // Command, mass rule and the kinematic motion come from the shared platen piece
-  // (core/Platen.h); under a force command Bullet integrates the platen as a dynamic body
-  // (implicitly coupled to the contacts by the solver) and the driver is synced to it.
-  PlatenDriver driver;
-  bool platen_dynamic = false;
 
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
-  std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
-  long compound_shapes = 0;  // concave polyhedra collided as convex pieces (shapes, not grains)
-  long compound_pieces = 0;
-  long compound_failures = 0;  // concave polyhedra collided as their hull because the cutting failed
-  double total_mass = 0;  // kg, physical
-  double last_dt = 0;
-  double friction_scale = 1;  // set_friction_scale
+  ShapeCache<ShapeEntry> shapes;
 
   // Sliding friction √(μ·s) per grain body (Bullet multiplies a pair's), and the tag's scale
   // for the wall and rolling terms of the combine callbacks. Bullet combines a contact's
   // friction whenever it refreshes the contact point, so the change acts from the next step.
-  void apply_friction_scale(double s) {
-    friction_scale = s;
+  void friction_scale_changed() override {
     for (auto& [id, gb] : grains) {
-      gb->tag.scale = s;
-      gb->body->setFriction(std::sqrt(gb->tag.friction * s));
+      gb->tag.scale = friction_scale;
+      gb->body->setFriction(std::sqrt(gb->tag.friction * friction_scale));
     }
   }
 
-  Impl(const Options& o, const EngineContext& c) : opt(o), ctx(c) {
+  static void check_context(const EngineContext& ctx) {
     std::string why;
     if (!bullet_double_precision_ok(&why)) throw std::runtime_error("bullet: " + why);
     if (ctx.dimension != 3) throw std::invalid_argument("bullet: the engine is 3D only");
@@ -304,6 +276,10 @@ struct BulletEngine::Impl {
         throw std::invalid_argument("bullet: material " + std::to_string(i) +
                                     " needs density > 0 and non-negative friction coefficients");
     }
+  }
+
+  Impl(const Options& o, const EngineContext& c) : RigidWorld("bullet", o, c), opt(o) {
+    check_context(ctx);
     install_combine_callbacks();
     // Bullet's default narrow phase: GJK/EPA, one new point per pair and step, gathered in
     // persistent manifolds (up to 4 points). Perturbed multi-point GJK was measured: 25 %
@@ -318,7 +294,7 @@ struct BulletEngine::Impl {
     solver = std::make_unique<ToleranceSolver>();
     solver->tolerance = opt.solver_tolerance;
     world = std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(), config.get());
-    world->setGravity(btVector3(0, 0, 0));  // per body, see add_grain
+    world->setGravity(btVector3(0, 0, 0));  // per body, see add_body
     world->getDispatchInfo().m_deterministicOverlappingPairs = true;
     btContactSolverInfo& si = world->getSolverInfo();
     si.m_numIterations = opt.solver_iterations;
@@ -332,7 +308,7 @@ struct BulletEngine::Impl {
     si.m_leastSquaresResidualThreshold = 0;
   }
 
-  ~Impl() {
+  ~Impl() override {
     // Bodies leave the world before the world goes.
     for (auto& [id, g] : grains) world->removeRigidBody(g->body.get());
     grains.clear();
@@ -345,20 +321,9 @@ struct BulletEngine::Impl {
   }
 
   // ---------------------------------------------------------------- units
-  double to_int(double si_length) const { return si_length * scale; }
   double force_si(double internal_impulse) const { return internal_impulse / (scale * last_dt); }
 
-  void fix_scale(double first_diameter) {
-    if (scale > 0) return;
-    if (opt.length_scale > 0) {
-      scale = opt.length_scale;
-    } else if (first_diameter > 0) {
-      // The power of two nearest to 1/d: a grain is ≈ 1 unit and conversions are exact.
-      scale = std::exp2(std::round(std::log2(1.0 / first_diameter)));
-    } else {
-      scale = 1;
-    }
-    ref_length = first_diameter > 0 ? first_diameter * scale : 1.0;
+  void scale_fixed() override {
     if (opt.deep_penetration > 0) {
       // Contacts deeper than deep_penetration × d get their own β (deep_erp, ToleranceSolver)
       // and Bullet's split impulse: the correction moves the bodies without adding velocity,
@@ -369,7 +334,6 @@ struct BulletEngine::Impl {
       solver->deep_depth = opt.deep_penetration * ref_length;
       solver->deep_erp = opt.deep_erp;
     }
-    if (have_container) build_container();
   }
 
   // ---------------------------------------------------------------- container
@@ -380,53 +344,48 @@ struct BulletEngine::Impl {
     platen.reset();
   }
 
-  std::unique_ptr<WallBody> make_static_plane(int wall, const Vec3& normal, double constant) {
+  // A crumble body of `shape` (mass 0: static until configured), frictionless and without
+  // restitution: grain–wall friction comes from the combine callback.
+  std::unique_ptr<WallBody> make_wall_body(int wall, std::unique_ptr<btCollisionShape> shape,
+                                           const btTransform& start) const {
     auto w = std::make_unique<WallBody>();
     w->tag.wall = wall;
-    w->shape = std::make_unique<btStaticPlaneShape>(bt(normal), constant);
+    w->shape = std::move(shape);
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, w->shape.get());
+    info.m_startWorldTransform = start;
     w->body = std::make_unique<btRigidBody>(info);
     w->body->setUserPointer(&w->tag);
     w->body->setUserIndex2(kCrumbleTag);
-    w->body->setFriction(0);  // grain–wall friction comes from the combine callback
+    w->body->setFriction(0);
     w->body->setRestitution(0);
-    world->addRigidBody(w->body.get(), kWallGroup, kGrainGroup);
     return w;
   }
 
-  void build_container() {
+  void build_container() override {
     remove_container_bodies();
-    const double lx = to_int(container.lx), ly = to_int(container.ly);
-    for (const WallPlane& w : container_planes(container, 3))
-      if (w.id != kPlaten) walls.push_back(make_static_plane(w.id, w.normal, to_int(w.offset())));
-    // Platen: a thick box a little wider than the box (it only meets grains), bottom face
-    // at `height`. Its margin lies inside the box, so the face stays where it is.
-    platen = std::make_unique<WallBody>();
-    platen->tag.wall = kPlaten;
-    platen_half_thickness = 0.25 * std::max(lx, ly);
-    auto box = std::make_unique<btBoxShape>(btVector3(0.55 * lx, 0.55 * ly, platen_half_thickness));
-    box->setMargin(std::min(opt.margin_fraction * ref_length, 0.5 * platen_half_thickness));
-    platen->shape = std::move(box);
-    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, platen->shape.get());
-    info.m_startWorldTransform.setIdentity();
-    info.m_startWorldTransform.setOrigin(btVector3(0.5 * lx, 0.5 * ly, to_int(driver.position()) + platen_half_thickness));
-    platen->body = std::make_unique<btRigidBody>(info);
-    platen->body->setUserPointer(&platen->tag);
-    platen->body->setUserIndex2(kCrumbleTag);
-    platen->body->setFriction(0);
-    platen->body->setRestitution(0);
+    btTransform t;
+    t.setIdentity();
+    for (const WallPlane& w : fixed_walls()) {
+      walls.push_back(make_wall_body(w.id, std::make_unique<btStaticPlaneShape>(bt(w.normal), to_int(w.offset())), t));
+      world->addRigidBody(walls.back()->body.get(), kWallGroup, kGrainGroup);
+    }
+    // The platen box's margin lies inside the box, so the face stays where it is.
+    const PlatenBox box = platen_box();
+    auto shape = std::make_unique<btBoxShape>(bt(box.half_extents));
+    shape->setMargin(std::min(opt.margin_fraction * ref_length, 0.5 * platen_half_thickness));
+    t.setOrigin(bt(box.centre));
+    platen = make_wall_body(kPlaten, std::move(shape), t);
     platen->body->setActivationState(DISABLE_DEACTIVATION);
     platen_dynamic = false;
     configure_platen_body();
   }
 
-  double platen_mass() const {
-    return std::max(crumble::platen_mass(container, total_mass), 1e-30) * opt.mass_scale;
-  }
+  bool has_platen() const override { return platen != nullptr; }
+  void set_platen_mass() override { platen->body->setMassProps(platen_mass(), btVector3(0, 0, 0)); }
 
   // Kinematic body for velocity control; dynamic body moving along z only for force
   // control. Changing the kind means leaving and re-entering the world.
-  void configure_platen_body() {
+  void configure_platen_body() override {
     btRigidBody* b = platen->body.get();
     if (b->isInWorld()) world->removeRigidBody(b);
     const bool dynamic = driver.force_driven();
@@ -454,63 +413,30 @@ struct BulletEngine::Impl {
     b->setInterpolationWorldTransform(b->getWorldTransform());
   }
 
-  double current_platen_z() const {
-    if (!platen || !platen_dynamic) return driver.position();
-    return (platen->body->getWorldTransform().getOrigin().z() - platen_half_thickness) / scale;
-  }
+  double platen_body_z() const override { return platen->body->getWorldTransform().getOrigin().z(); }
 
   // ---------------------------------------------------------------- grains
   std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
-    auto it = shape_cache.find(shape.get());
-    if (it != shape_cache.end()) {
-      if (auto e = it->second.lock()) return e;
-    }
-    // Drop stale entries now and then so the cache does not grow with fragments.
-    for (auto i = shape_cache.begin(); i != shape_cache.end();)
-      i = i->second.expired() ? shape_cache.erase(i) : std::next(i);
-
-    auto e = std::make_shared<ShapeEntry>();
-    e->shape = shape;
-    const MassProperties& mp = shape->mass_properties();
-    if (!(mp.volume > 0)) throw std::invalid_argument("bullet: shape " + shape->describe() + " has no volume");
-    e->centroid = mp.centroid;
-    // Bullet keeps a diagonal inertia: use the principal frame when the shape's is not.
-    const Mat3& I = mp.inertia;
-    const double tr = std::abs(I.trace());
-    const double offdiag = std::max({std::abs(I(0, 1)), std::abs(I(0, 2)), std::abs(I(1, 2))});
-    if (offdiag <= 1e-12 * tr) {
-      e->moments = {I(0, 0), I(1, 1), I(2, 2)};
-      e->principal = Quat{};
-    } else {
-      const auto pa = principal_axes(I);
-      e->moments = pa.moments;
-      e->principal = pa.rotation;
-    }
-    if (!(e->moments.x > 0 && e->moments.y > 0 && e->moments.z > 0))
-      throw std::invalid_argument("bullet: shape " + shape->describe() + " has a non-positive principal moment");
-
-    const double d = shape->equivalent_diameter();
-    if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
-      e->collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
-    } else if (auto pieces = concave_shape_pieces(*shape, opt.concave, "bullet", &compound_failures); !pieces.empty()) {
-      // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
-      // concave in the engine) collides as convex pieces whose hulls cover it; a convex one
-      // (within concavity_tolerance of its hull) as its hull, as below.
-      auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(pieces.size()));
-      btTransform identity;
-      identity.setIdentity();
-      for (const auto& piece : pieces) {
-        e->pieces.push_back(hull_shape(piece, d, *e));
-        compound->addChildShape(identity, e->pieces.back().get());
+    return shapes.get(shape, engine, [&](ShapeEntry& e) {
+      const double d = shape->equivalent_diameter();
+      if (exact_sphere(*shape)) {
+        e.collision = std::make_unique<btSphereShape>(to_int(shape->parameters().at(0)));
+      } else if (auto pieces = convex_pieces(*shape); !pieces.empty()) {
+        // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
+        // concave in the engine) collides as convex pieces whose hulls cover it; a convex one
+        // (within concavity_tolerance of its hull) as its hull, as below.
+        auto compound = std::make_unique<btCompoundShape>(true, static_cast<int>(pieces.size()));
+        btTransform identity;
+        identity.setIdentity();
+        for (const auto& piece : pieces) {
+          e.pieces.push_back(hull_shape(piece, d, e));
+          compound->addChildShape(identity, e.pieces.back().get());
+        }
+        e.collision = std::move(compound);
+      } else {
+        e.collision = hull_shape(shape->convex_hull(), d, e);
       }
-      e->collision = std::move(compound);
-      ++compound_shapes;
-      compound_pieces += static_cast<long>(pieces.size());
-    } else {
-      e->collision = hull_shape(shape->convex_hull(), d, *e);
-    }
-    shape_cache[shape.get()] = e;
-    return e;
+    });
   }
 
   // A convex hull (shape frame) as Bullet's hull in the principal frame of `e`, in internal
@@ -537,33 +463,27 @@ struct BulletEngine::Impl {
     return hs;
   }
 
-  btTransform body_transform(const ShapeEntry& e, const Vec3& position, const Quat& orientation) const {
-    const Quat q = orientation.normalized();
-    const Vec3 com = position + q.rotate(e.centroid);
-    btTransform t;
-    t.setOrigin(bt(com * scale));
-    t.setRotation(bt((q * e.principal).normalized()));
-    return t;
+  bool has_grain(GrainId id) const override { return grains.count(id) != 0; }
+  std::size_t grain_count() const override { return grains.size(); }
+
+  // A rigid body in the principal frame of its shape, with the shape's exact mass
+  // properties (calculateLocalInertia of a hull is a box estimate), both scaled by
+  // mass_scale (Zhu & Zhao 2019 §5).
+  std::unique_ptr<btRigidBody> make_grain_body(const ShapeEntry& e, const Material& mat, double mass,
+                                               const BodyMotion& start) const {
+    const Vec3 inertia = e.moments * (mat.density * opt.mass_scale * scale * scale);
+    btRigidBody::btRigidBodyConstructionInfo info(mass * opt.mass_scale, nullptr, e.collision.get(), bt(inertia));
+    info.m_startWorldTransform.setOrigin(bt(start.com));
+    info.m_startWorldTransform.setRotation(bt((start.orientation * e.principal).normalized()));
+    info.m_friction = std::sqrt(mat.friction * friction_scale);
+    info.m_rollingFriction = mat.rolling_friction;
+    info.m_restitution = 0;
+    info.m_linearDamping = 0;
+    info.m_angularDamping = 0;
+    return std::make_unique<btRigidBody>(info);
   }
 
-  void add_grain(const Grain& g) {
-    if (!g.shape) throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has no shape");
-    if (g.shape->dimension() != 3)
-      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has a 2D shape; the engine is 3D");
-    if (g.material < 0 || g.material >= static_cast<int>(ctx.materials.size()))
-      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has material index " +
-                                  std::to_string(g.material) + " out of range");
-    if (grains.count(g.id)) throw std::invalid_argument("bullet: grain id " + std::to_string(g.id) + " added twice");
-    require_finite(g.position, "position", g.id);
-    require_finite(g.velocity, "velocity", g.id);
-    require_finite(g.angular_velocity, "angular velocity", g.id);
-    const double qn = std::sqrt(g.orientation.w * g.orientation.w + g.orientation.x * g.orientation.x +
-                                g.orientation.y * g.orientation.y + g.orientation.z * g.orientation.z);
-    if (!(qn > 0) || !std::isfinite(qn))
-      throw std::invalid_argument("bullet: grain " + std::to_string(g.id) + " has an invalid orientation");
-
-    fix_scale(g.shape->equivalent_diameter());
-    const Material& mat = ctx.materials[g.material];
+  double add_body(const Grain& g, const Material& mat) override {
     auto gb = std::make_unique<GrainBody>();
     gb->entry = shape_entry(g.shape);
     gb->tag.id = g.id;
@@ -572,18 +492,8 @@ struct BulletEngine::Impl {
     gb->tag.rolling_friction = mat.rolling_friction;
     gb->tag.scale = friction_scale;
     gb->mass = mat.density * g.shape->volume();
-    // Inertia from the shape's exact mass properties (calculateLocalInertia of a hull is a
-    // box estimate); both scaled by mass_scale (Zhu & Zhao 2019 §5).
-    const double m = gb->mass * opt.mass_scale;
-    const Vec3 inertia = gb->entry->moments * (mat.density * opt.mass_scale * scale * scale);
-    btRigidBody::btRigidBodyConstructionInfo info(m, nullptr, gb->entry->collision.get(), bt(inertia));
-    info.m_startWorldTransform = body_transform(*gb->entry, g.position, g.orientation);
-    info.m_friction = std::sqrt(mat.friction * friction_scale);
-    info.m_rollingFriction = mat.rolling_friction;
-    info.m_restitution = 0;
-    info.m_linearDamping = 0;
-    info.m_angularDamping = 0;
-    gb->body = std::make_unique<btRigidBody>(info);
+    const BodyMotion start = initial_motion(g, gb->entry->centroid);
+    gb->body = make_grain_body(*gb->entry, mat, gb->mass, start);
     btRigidBody* b = gb->body.get();
     b->setUserPointer(&gb->tag);
     b->setUserIndex2(kCrumbleTag);
@@ -591,23 +501,20 @@ struct BulletEngine::Impl {
     b->setFlags(b->getFlags() | BT_DISABLE_WORLD_GRAVITY);
     // Mass scaling slows the dynamics; the weight stays m·g.
     b->setGravity(bt(ctx.gravity * (scale / opt.mass_scale)));
-    const Quat q = g.orientation.normalized();
-    b->setLinearVelocity(bt((g.velocity + cross(g.angular_velocity, q.rotate(gb->entry->centroid))) * scale));
-    b->setAngularVelocity(bt(g.angular_velocity));
+    b->setLinearVelocity(bt(start.velocity));
+    b->setAngularVelocity(bt(start.angular_velocity));
     world->addRigidBody(b, kGrainGroup, kGrainGroup | kWallGroup | kPlatenGroup);
-    total_mass += gb->mass;
+    const double mass = gb->mass;
     grains.emplace(g.id, std::move(gb));
-    if (platen && platen_dynamic && container.platen_mass <= 0) platen->body->setMassProps(platen_mass(), btVector3(0, 0, 0));
+    return mass;
   }
 
-  void remove_grain(GrainId id) {
+  double remove_body(GrainId id) override {
     auto it = grains.find(id);
-    if (it == grains.end()) throw std::invalid_argument("bullet: remove_grain: unknown grain id " + std::to_string(id));
     world->removeRigidBody(it->second->body.get());
-    total_mass -= it->second->mass;
+    const double mass = it->second->mass;
     grains.erase(it);
-    if (grains.empty()) total_mass = 0;
-    if (platen && platen_dynamic && container.platen_mass <= 0) platen->body->setMassProps(platen_mass(), btVector3(0, 0, 0));
+    return mass;
   }
 
   // ---------------------------------------------------------------- stepping
@@ -639,10 +546,7 @@ struct BulletEngine::Impl {
     return quatRotate(q, wb2) - w1;
   }
 
-  void step(double dt) {
-    if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("bullet: step needs a finite dt > 0");
-    if (scale <= 0) fix_scale(0);
-    if (!have_container) throw std::logic_error("bullet: step() before set_container()");
+  void advance(double dt) override {
     btContactSolverInfo& si = world->getSolverInfo();
     // Bullet's residual = the largest squared velocity change of a row in the last
     // iteration (internal units); solver_residual is that change times dt, in length units.
@@ -655,12 +559,21 @@ struct BulletEngine::Impl {
       // Kinematic: Bullet derives the velocity from the new transform.
       driver.advance(dt, 0, 0);
       btTransform t = p->getWorldTransform();
-      t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), to_int(driver.position()) + platen_half_thickness));
+      t.setOrigin(btVector3(t.getOrigin().x(), t.getOrigin().y(), platen_centre_z()));
       p->setWorldTransform(t);
     }
-    // Torque-free precession (Euler's equations) of the grains that touched nothing in the
-    // last step; a grain in contact gets Bullet's own term inside the solver (see
-    // gyroscopic_step for why that one is ≈ 0 for mm grains).
+    precess_free_grains(dt);
+    solver->max_iterations = 0;
+    solver->max_change = 0;
+    solver->rolling.clear();
+    world->stepSimulation(dt, 0);  // exactly one internal step of dt
+    if (platen_dynamic) sync_platen(p->getLinearVelocity().z());
+  }
+
+  // Torque-free precession (Euler's equations) of the grains that touched nothing in the
+  // last step; a grain in contact gets Bullet's own term inside the solver (see
+  // gyroscopic_step for why that one is ≈ 0 for mm grains).
+  void precess_free_grains(double dt) {
     std::unordered_set<const btCollisionObject*> touching;
     for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
       const btPersistentManifold* m = dispatcher->getInternalManifoldPointer()[i];
@@ -672,23 +585,12 @@ struct BulletEngine::Impl {
       btRigidBody* b = gb->body.get();
       if (!touching.count(b)) b->setAngularVelocity(b->getAngularVelocity() + gyroscopic_step(*b, dt));
     }
-    last_dt = dt;
-    solver->max_iterations = 0;
-    solver->max_change = 0;
-    solver->rolling.clear();
-    world->stepSimulation(dt, 0);  // exactly one internal step of dt
-    if (platen_dynamic) driver.sync(current_platen_z(), p->getLinearVelocity().z() / scale);
   }
 
-  // Impulse (internal units) on body0 of a manifold: normal plus both friction directions.
-  static btVector3 impulse_on_body0(const btPersistentManifold* m) {
-    btVector3 j(0, 0, 0);
-    for (int k = 0; k < m->getNumContacts(); ++k) {
-      const btManifoldPoint& p = m->getContactPoint(k);
-      j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
+  // Impulse (internal units) on body0 of a manifold point: normal plus both friction directions.
+  static btVector3 impulse_on_body0(const btManifoldPoint& p) {
+    return p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
            p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
-    }
-    return j;
   }
 
   // Impulse on a wall body (internal units), summed over its manifolds.
@@ -701,7 +603,8 @@ struct BulletEngine::Impl {
       const BodyTag* t0 = tag_of(m->getBody0());
       const BodyTag* t1 = tag_of(m->getBody1());
       if (!t0 || !t1) continue;
-      const btVector3 j0 = impulse_on_body0(m);
+      btVector3 j0(0, 0, 0);
+      for (int k = 0; k < m->getNumContacts(); ++k) j0 += impulse_on_body0(m->getContactPoint(k));
       if (t0->wall == wall) j += j0;
       if (t1->wall == wall) j -= j0;
     }
@@ -709,185 +612,119 @@ struct BulletEngine::Impl {
   }
   double wall_impulse_z(int wall) const { return wall_impulse(wall).z(); }
 
-  std::vector<Contact> contacts() const {
+  double platen_force() const override {
+    if (last_dt <= 0) return 0;
+    return force_si(wall_impulse_z(kPlaten));  // up on the platen = compression
+  }
+
+  double floor_force() const override {
+    if (last_dt <= 0) return 0;
+    return -force_si(wall_impulse_z(kFloor));  // grains push the floor down
+  }
+
+  double wall_force(int wall) const override {
+    if (last_dt <= 0 || wall < kFloor || wall > kWallYMax) return 0;
+    const Vec3 n = wall_inward_normal(wall, 3);
+    const btVector3 j = wall_impulse(wall);
+    return -force_si(j.x() * n.x + j.y() * n.y + j.z() * n.z);  // outwards on the wall
+  }
+
+  // The Contact of a manifold that carried a positive normal impulse: force = summed
+  // impulses / Δt, point = the normal-impulse-weighted mean of its points' midpoints.
+  bool manifold_contact(const btPersistentManifold& m, const BodyTag& t0, const BodyTag& t1, Contact& c) const {
+    btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), couple(0, 0, 0);
+    double jn = 0, depth = 0;
+    for (int k = 0; k < m.getNumContacts(); ++k) {
+      const btManifoldPoint& p = m.getContactPoint(k);
+      depth = std::max(depth, -static_cast<double>(p.getDistance()));
+      const btVector3 mid = 0.5 * (p.getPositionWorldOnA() + p.getPositionWorldOnB());
+      j += impulse_on_body0(p);
+      if (const auto r = solver->rolling.find(&p); r != solver->rolling.end()) couple += r->second;
+      const double w = std::max(p.m_appliedImpulse, btScalar(0));
+      point += mid * w;
+      normal += p.m_normalWorldOnB * w;
+      jn += w;
+    }
+    if (!(jn > 0)) return false;  // touching without force: not an active contact
+    point /= jn;
+    normal = normal.length2() > 0 ? normal.normalized() : m.getContactPoint(0).m_normalWorldOnB;
+    // Bullet's normal on B points from B to A, and j is the impulse on A (body0).
+    c = pair_contact({t0.id, t0.wall}, {t1.id, t1.wall}, vec(j), scale * last_dt, vec(couple),
+                     scale * scale * last_dt, vec(normal), vec(point) / scale, depth / scale);
+    return true;
+  }
+
+  std::vector<Contact> contacts() const override {
     std::vector<Contact> out;
     if (last_dt <= 0) return out;
     const int n = dispatcher->getNumManifolds();
     for (int i = 0; i < n; ++i) {
       const btPersistentManifold* m = dispatcher->getInternalManifoldPointer()[i];
-      const int np = m->getNumContacts();
-      if (np == 0) continue;
+      if (m->getNumContacts() == 0) continue;
       const BodyTag* t0 = tag_of(m->getBody0());
       const BodyTag* t1 = tag_of(m->getBody1());
       if (!t0 || !t1 || (t0->wall >= 0 && t1->wall >= 0)) continue;
-      btVector3 j(0, 0, 0), point(0, 0, 0), normal(0, 0, 0), mid_sum(0, 0, 0), couple(0, 0, 0);
-      double jn = 0, depth = 0;
-      for (int k = 0; k < np; ++k) {
-        const btManifoldPoint& p = m->getContactPoint(k);
-        depth = std::max(depth, -static_cast<double>(p.getDistance()));
-        const btVector3 mid = 0.5 * (p.getPositionWorldOnA() + p.getPositionWorldOnB());
-        j += p.m_normalWorldOnB * p.m_appliedImpulse + p.m_lateralFrictionDir1 * p.m_appliedImpulseLateral1 +
-             p.m_lateralFrictionDir2 * p.m_appliedImpulseLateral2;
-        if (const auto r = solver->rolling.find(&p); r != solver->rolling.end()) couple += r->second;
-        const double w = std::max(p.m_appliedImpulse, btScalar(0));
-        point += mid * w;
-        normal += p.m_normalWorldOnB * w;
-        jn += w;
-        mid_sum += mid;
-      }
-      if (!(jn > 0)) continue;  // touching without force: not an active contact
-      point /= jn;
-      normal = normal.length2() > 0 ? normal.normalized() : m->getContactPoint(0).m_normalWorldOnB;
-      // Bullet's normal on B points from B to A, and j is the impulse on A (body0).
-      Contact c;
-      bool flip = false;
-      if (t0->wall >= 0) {  // wall is body0: the grain (body1) is `a`
-        c.a = t1->id;
-        c.wall = t0->wall;
-        flip = true;
-      } else if (t1->wall >= 0) {
-        c.a = t0->id;
-        c.wall = t1->wall;
-      } else {
-        // Grain pair once, `a` the smaller id.
-        flip = t1->id < t0->id;
-        c.a = flip ? t1->id : t0->id;
-        c.b = flip ? t0->id : t1->id;
-      }
-      const double sgn = flip ? -1.0 : 1.0;
-      c.force = vec(j) * (sgn / (scale * last_dt));
-      c.torque = vec(couple) * (sgn / (scale * scale * last_dt));
-      c.normal = vec(normal) * sgn;
-      c.point = vec(point) / scale;
-      c.overlap = depth / scale;
-      out.push_back(c);
+      if (Contact c; manifold_contact(*m, *t0, *t1, c)) out.push_back(c);
     }
     return out;
   }
 
-  void read_state(std::span<Grain> gs) const {
-    for (auto& g : gs) {
-      auto it = grains.find(g.id);
-      if (it == grains.end()) continue;
-      const GrainBody& gb = *it->second;
-      const btRigidBody* b = gb.body.get();
-      const btTransform& t = b->getWorldTransform();
-      const Quat q = (quat(t.getRotation()) * gb.entry->principal.conjugate()).normalized();
-      const Vec3 com = vec(t.getOrigin()) / scale;
-      const Vec3 arm = q.rotate(gb.entry->centroid);
-      const Vec3 w = vec(b->getAngularVelocity());
-      g.orientation = q;
-      g.position = com - arm;
-      g.angular_velocity = w;
-      g.velocity = vec(b->getLinearVelocity()) / scale - cross(w, arm);
-    }
-  }
-
-  void set_container(const Container& c) {
-    require_closed_box(c, "bullet");
-    container = c;
-    have_container = true;
-    driver.reset(c.height);
-    if (scale > 0) build_container();
-  }
-
-  void set_platen(const PlatenCommand& cmd) {
-    if (!std::isfinite(cmd.value)) throw std::invalid_argument("bullet: platen command value is not finite");
-    const bool mode_change = cmd.mode != driver.command().mode;
-    driver.set_command(cmd);
-    if (platen && mode_change) configure_platen_body();
+  bool body_motion(GrainId id, BodyMotion& m, Vec3& centroid) const override {
+    auto it = grains.find(id);
+    if (it == grains.end()) return false;
+    const GrainBody& gb = *it->second;
+    const btRigidBody* b = gb.body.get();
+    const btTransform& t = b->getWorldTransform();
+    m.orientation = (quat(t.getRotation()) * gb.entry->principal.conjugate()).normalized();
+    m.com = vec(t.getOrigin());
+    m.velocity = vec(b->getLinearVelocity());
+    m.angular_velocity = vec(b->getAngularVelocity());
+    centroid = gb.entry->centroid;
+    return true;
   }
 };
 
 // ------------------------------------------------------------------ BulletEngine
 
 const OptionTable& bullet_options() {
-  static const OptionTable t = [] {
-    const BulletEngine::Options d;
-    OptionTable table{
-        opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
-                    "spheres as their icosphere mesh (42 vertices, as Zhu & Zhao 2019) or \"sphere\" (exact btSphereShape)"),
-        opt::number("length_scale", d.length_scale, 0, std::numeric_limits<double>::infinity(), "",
-                    "internal units per metre; 0 = the power of two nearest 1/d of the first grain (2 mm → 512)"),
-        opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "", "collision margin / d (hulls are inset by it)"),
-        opt::integer("solver_iterations", d.solver_iterations, 1, 1000000,
-                     "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
-        opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
-                    "stop when impulses change by at most this fraction between iterations (0 = always run solver_iterations, as Zhu & Zhao 2019 §2.2)"),
-        opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
-        opt::number("erp", d.erp, 0, 1, "", "penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
-        opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
-                    "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
-                    "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
-        opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
-        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (Zhu & Zhao 2019 §5 use 70)"),
-    };
-    for (auto& spec : concave_shape_options("btCompoundShape")) table.push_back(std::move(spec));
-    return table;
-  }();
+  const BulletEngine::Options d;
+  static const OptionTable t = with_concave_shape_options(
+      {
+          rigid_option::sphere_representation("icosphere mesh (42 vertices, as Zhu & Zhao 2019)", "btSphereShape"),
+          rigid_option::length_scale("2 mm → 512"),
+          opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "",
+                              "collision margin / d (hulls are inset by it)"),
+          rigid_option::solver_iterations(
+              "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
+          opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
+                      "stop when impulses change by at most this fraction between iterations (0 = always run "
+                      "solver_iterations, as Zhu & Zhao 2019 §2.2)"),
+          opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
+          rigid_option::erp("penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
+          opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
+                      "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
+                      "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
+          opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
+          rigid_option::mass_scale("Zhu & Zhao 2019 §5 use 70"),
+      },
+      "btCompoundShape");
   return t;
 }
 
 BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
-  cfg.string("type", "bullet");
-  const crumble::Options r(cfg, bullet_options());
-  Options o;
-  o.exact_spheres = r.string("sphere_representation") == "sphere";
-  o.length_scale = r.number("length_scale");
-  o.margin_fraction = r.number("margin_fraction");
-  o.solver_iterations = static_cast<int>(r.integer("solver_iterations"));
-  o.solver_tolerance = r.number("solver_tolerance");
-  o.solver_residual = r.number("solver_residual");
-  o.erp = r.number("erp");
-  o.deep_penetration = r.number("deep_penetration");
-  o.deep_erp = r.number("deep_erp");
-  o.mass_scale = r.number("mass_scale");
-  o.concave = read_concave_shape_options(r);
-  return o;
+  return read_rigid_engine_options<Options>(cfg, "bullet", bullet_options(), [](const crumble::Options& r, Options& o) {
+    o.margin_fraction = r.number("margin_fraction");
+    o.solver_tolerance = r.number("solver_tolerance");
+    o.solver_residual = r.number("solver_residual");
+    o.deep_penetration = r.number("deep_penetration");
+    o.deep_erp = r.number("deep_erp");
+  });
 }
 
 BulletEngine::BulletEngine(const Options& opts, const EngineContext& ctx)
-    : impl_(std::make_unique<Impl>(opts, ctx)) {}
-BulletEngine::~BulletEngine() = default;
-
-void BulletEngine::set_container(const Container& c) { impl_->set_container(c); }
-void BulletEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
-bool BulletEngine::set_friction_scale(double scale) {
-  if (!(scale >= 0 && scale <= 1)) return false;
-  impl_->apply_friction_scale(scale);
-  return true;
-}
-void BulletEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
-std::size_t BulletEngine::grain_count() const { return impl_->grains.size(); }
-void BulletEngine::step(double dt) { impl_->step(dt); }
-void BulletEngine::read_state(std::span<Grain> grains) const { impl_->read_state(grains); }
-std::vector<Contact> BulletEngine::contacts() const { return impl_->contacts(); }
-void BulletEngine::set_platen(const PlatenCommand& cmd) { impl_->set_platen(cmd); }
-double BulletEngine::platen_position() const { return impl_->current_platen_z(); }
-
-double BulletEngine::platen_force() const {
-  if (impl_->last_dt <= 0) return 0;
-  return impl_->force_si(impl_->wall_impulse_z(kPlaten));  // up on the platen = compression
-}
-
-double BulletEngine::floor_force() const {
-  if (impl_->last_dt <= 0) return 0;
-  return -impl_->force_si(impl_->wall_impulse_z(kFloor));  // grains push the floor down
-}
-
-double BulletEngine::wall_force(int wall) const {
-  if (impl_->last_dt <= 0 || wall < kFloor || wall > kWallYMax) return 0;
-  const Vec3 n = wall_inward_normal(wall, 3);
-  const btVector3 j = impl_->wall_impulse(wall);
-  return -impl_->force_si(j.x() * n.x + j.y() * n.y + j.z() * n.z);  // outwards on the wall
-}
+    : RigidEngine(std::make_unique<Impl>(opts, ctx)), impl_(static_cast<Impl*>(&world())) {}
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
-std::map<std::string, double> BulletEngine::summary_figures() const {
-  return {{"compound_shapes", static_cast<double>(impl_->compound_shapes)},
-          {"compound_pieces", static_cast<double>(impl_->compound_pieces)},
-          {"compound_failures", static_cast<double>(impl_->compound_failures)}};
-}
 
 Engine::SolverReport BulletEngine::solver_report() const {
   const ToleranceSolver& s = *impl_->solver;
@@ -899,21 +736,15 @@ Engine::SolverReport BulletEngine::solver_report() const {
   return r;
 }
 
-double BulletEngine::length_scale() const { return impl_->scale; }
-
 int BulletEngine::last_solver_iterations() const { return impl_->solver->max_iterations; }
 
 std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx) {
-  const auto opts = BulletEngine::read_options(cfg);
-  if (ctx.dimension != 3) cfg.fail("", "the bullet engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
-  return std::make_unique<BulletEngine>(opts, ctx);
+  return make_rigid_engine<BulletEngine>(cfg, ctx, "bullet");
 }
 
+// btScalar is double in this translation unit (the static_assert above); whether the linked
+// library is too is asked of the library itself.
 bool bullet_double_precision_ok(std::string* why) {
-  if (sizeof(btScalar) != sizeof(double)) {
-    if (why) *why = "btScalar is not double in crumble_bullet";
-    return false;
-  }
   // Ask the linked library: a sphere's AABB is computed inside libBulletCollision. With the
   // single-precision library linked against double headers the layout differs and the
   // value comes back wrong.

@@ -50,38 +50,27 @@
 #pragma once
 #include <memory>
 
+#include "backends/rigid/RigidEngine.h"
+#include "backends/rigid/RigidOptions.h"
 #include "core/Config.h"
-#include "core/ConcaveShapes.h"
 #include "core/Options.h"
-#include "core/Engine.h"
 
 namespace crumble {
 
-// The options of the "engine" object (`crumble list --options bullet`).
-const OptionTable& bullet_options();
-std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx);
-
-class BulletEngine final : public Engine {
+class BulletEngine final : public RigidEngine {
  public:
-  struct Options {
-    bool exact_spheres = false;
-    double length_scale = 0;
+  // The shared keys (backends/rigid/RigidOptions.h) and Bullet's own.
+  struct Options : RigidOptions {
     double margin_fraction = 0.01;
-    int solver_iterations = 100;
     double solver_tolerance = 2e-4;
     double solver_residual = 0;
-    double erp = 0.003;
     double deep_penetration = 0;  // fraction of the first grain's d; 0 = off
     double deep_erp = 0.2;
-    double mass_scale = 1;
-    ConcaveShapeOptions concave;       // "concave_shapes", "concavity_tolerance", "max_convex_pieces"
   };
   static Options read_options(const Config& cfg);
 
   BulletEngine(const Options& opts, const EngineContext& ctx);
-  ~BulletEngine() override;
 
-  std::string name() const override { return "bullet"; }
   // On the Zhu & Zhao oedometer (docs/validation.md) a smaller step or more iterations did not
   // stop a fragment creeping into a neighbour; the deep-penetration correction did.
   std::string guard_advice() const override {
@@ -89,32 +78,21 @@ class BulletEngine final : public Engine {
            "(engine.solver_iterations, engine.solver_tolerance 0), reduce the time step (time_step), or lower "
            "loading.max_stress; a run stopped here resumes with any of these from its last checkpoint.";
   }
-  void set_container(const Container& c) override;
-  void add_grain(const Grain& g) override;
-  bool set_friction_scale(double scale) override;
-  void remove_grain(GrainId id) override;
-  std::size_t grain_count() const override;
-  void step(double dt) override;
-  void read_state(std::span<Grain> grains) const override;
-  std::vector<Contact> contacts() const override;
-  void set_platen(const PlatenCommand& cmd) override;
-  double platen_position() const override;
-  double platen_force() const override;
-  double floor_force() const override;
-  double wall_force(int wall) const override;
   SolverReport solver_report() const override;
-  std::map<std::string, double> summary_figures() const override;
 
   // Diagnostics.
-  double length_scale() const;             // internal units per metre (0 until fixed)
   // Zhu's relative impulse change ε at the last iteration of the last step (largest island).
   double last_solver_change() const;
   int last_solver_iterations() const;      // most PGS iterations an island needed in the last step (-1 before any)
 
  private:
   struct Impl;
-  std::unique_ptr<Impl> impl_;
+  Impl* impl_;  // owned by RigidEngine
 };
+
+// The options of the "engine" object (`crumble list --options bullet`).
+const OptionTable& bullet_options();
+std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx);
 
 // Checks that this build uses Bullet's double-precision libraries consistently: btScalar
 // is double in our translation units and the linked library computes in double. Returns

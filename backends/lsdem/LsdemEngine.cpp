@@ -536,29 +536,205 @@ void LsdemEngine::build_near() {
     }
 }
 
-void LsdemEngine::compute_forces(double dt) {
-  const int dim = ctx_.dimension;
-  const std::size_t nb = bodies_.size();
-  const std::vector<Wall> W = walls();
+namespace {
 
-  // Broad phase: the Verlet list (build_near) holds every pair whose bounding spheres can
-  // overlap until two grains have together moved farther than its skin.
+// The master A seen from the partner B: A's nodes in B's body frame, y = Rab·x + tab.
+struct PairView {
+  const LsdemEngine::Body& A;
+  const LsdemEngine::Body& B;
+  const LsdemEngine::ShapeData& sa;
+  const LsdemEngine::ShapeData& sb;
+  const LevelSetGrid& gb;
+  Mat3 Rab;
+  Vec3 tab;
+  double skin;  // half a cell of B's grid
+  PairView(const LsdemEngine::Body& a, const LsdemEngine::Body& b)
+      : A(a), B(b), sa(*a.sd), sb(*b.sd), gb(*b.sd->grid), skin(0.5 * b.sd->grid->spacing()) {
+    const Mat3 RbT = B.R.transposed();
+    Rab = RbT * A.R;
+    tab = RbT * (A.x - B.x);
+  }
+  Vec3 node_in_b(int i) const { return Rab * sa.nodes[i] + tab; }
+  // Appends node i to P when it penetrates B.
+  void visit(int i, std::vector<PenNode>& P) const {
+    Vec3 g;
+    const Vec3 y = node_in_b(i);
+    const double phi = gb.value_gradient(y, g);
+    if (phi >= 0) return;
+    const double gn = norm(g);
+    if (!(gn > 0)) return;
+    const Vec3 n = B.R * (g / gn);
+    const Vec3 X = A.R * sa.nodes[i] + A.x;
+    P.push_back({i, -phi, n, X + n * (-0.5 * phi), sa.w[i]});
+  }
+};
+
+// Full search: descend the master's node tree, pruning subtrees outside the partner's
+// bounding sphere or box (in its frame) or farther than the skin; the nodes within the skin
+// become the pair's candidates `cand`.
+void search_nodes(const PairView& pv, std::vector<int>& cand, LsdemEngine::Item& it, int dim, double lipschitz,
+                  std::vector<PenNode>& P) {
+  const LsdemEngine::ShapeData &sa = pv.sa, &sb = pv.sb;
+  const LevelSetGrid& gb = pv.gb;
+  const double rb = sb.radius, skin = pv.skin;
+  int stack[64];
+  int top = 0;
+  if (!sa.clusters.empty() && norm2(pv.B.x - pv.A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
+  while (top > 0) {
+    const auto& c = sa.clusters[stack[--top]];
+    const Vec3 yc = pv.Rab * c.c + pv.tab;
+    const double reach = c.r + skin;
+    if (norm2(yc) > (reach + rb) * (reach + rb)) continue;
+    bool out = false;
+    for (int a = 0; a < dim && !out; ++a) out = yc[a] + reach < sb.box.lo[a] || yc[a] - reach > sb.box.hi[a];
+    if (out) continue;
+    // Each partial derivative of the trilinear interpolant of 1-Lipschitz samples is
+    // a mean of edge slopes in [−1, 1], so |∇φ| ≤ √dim: the whole sphere is farther
+    // than the skin from the partner when φ(centre) > √dim · r + skin.
+    if (c.r > 0.5 * gb.spacing() || c.left >= 0) {
+      ++it.tree_queries;
+      if ((gb.inside_grid(yc) ? gb.value_inside(yc) : gb.value(yc)) > lipschitz * c.r + skin) continue;
+    }
+    if (c.left >= 0) {
+      stack[top++] = c.right;
+      stack[top++] = c.left;
+      continue;
+    }
+    for (int i = c.begin; i < c.end; ++i) {
+      const Vec3 y = pv.node_in_b(i);
+      bool outside = false;
+      for (int a = 0; a < dim && !outside; ++a) outside = y[a] < sb.box.lo[a] - skin || y[a] > sb.box.hi[a] + skin;
+      if (outside) continue;
+      ++it.queries;
+      const double phi = gb.inside_grid(y) ? gb.value_inside(y) : gb.value(y);
+      if (phi >= skin) continue;
+      cand.push_back(i);
+      if (phi < 0) pv.visit(i, P);
+    }
+  }
+}
+
+// The master A's nodes that penetrate B (a grain or a shape wall), appended to P with their
+// penetration, the partner's normal, the contact point and the node's weight: only the
+// candidates of the pair's last full search while the bound on their accumulated motion stays
+// below the skin, else a full search (see the header).
+void penetrating_nodes(const LsdemEngine::Body& A, const LsdemEngine::Body& B, LsdemEngine::Item& it, int dim,
+                       std::vector<PenNode>& P) {
+  const double lipschitz = std::sqrt(double(dim)) * (1 + 1e-9);
+  const PairView pv(A, B);
+  auto& ps = *it.st;
+  const bool had = !it.fresh && ps.has_cand;
+  const double drift =
+      had ? ps.drift + A.moved + B.moved + A.turned * pv.sa.radius + B.turned * (pv.sa.radius + norm(A.x - B.x)) : 0;
+  if (had && lipschitz * drift < pv.skin) {
+    // No node outside the candidates can have reached the partner since the search.
+    ps.drift = drift;
+    for (int i : ps.cand) {
+      ++it.queries;
+      const Vec3 y = pv.node_in_b(i);
+      if (pv.gb.inside_grid(y) && pv.gb.value_inside(y) < 0) pv.visit(i, P);
+    }
+    return;
+  }
+  ps.cand.clear();
+  ps.drift = 0;
+  ps.has_cand = true;
+  search_nodes(pv, ps.cand, it, dim, lipschitz, P);
+}
+
+// The master A's nodes behind the plane wall wl, appended to P (the tree pruned by the
+// clusters' bounding spheres).
+void nodes_behind_wall(const LsdemEngine::Body& A, const WallPlane& wl, LsdemEngine::Item& it, std::vector<PenNode>& P) {
+  const LsdemEngine::ShapeData& sa = *A.sd;
+  int stack[64];
+  int top = 0;
+  if (!sa.clusters.empty()) stack[top++] = 0;
+  while (top > 0) {
+    const auto& c = sa.clusters[stack[--top]];
+    const Vec3 xc = A.R * c.c + A.x;
+    if (dot(xc - wl.point, wl.normal) > c.r) continue;
+    if (c.left >= 0) {
+      stack[top++] = c.right;
+      stack[top++] = c.left;
+      continue;
+    }
+    for (int i = c.begin; i < c.end; ++i) {
+      const Vec3 X = A.R * sa.nodes[i] + A.x;
+      const double s = dot(X - wl.point, wl.normal);
+      ++it.queries;
+      if (s >= 0) continue;
+      P.push_back({i, -s, wl.normal, X + wl.normal * (-0.5 * s), sa.w[i]});
+    }
+  }
+}
+
+Law base_law(const LsdemSettings& s) {
+  Law L;
+  L.hertz = s.contact_law == "hertz";
+  L.ks_ratio = s.ks_ratio;
+  L.zeta = s.damping_ratio;
+  return L;
+}
+
+// The law of grain A (material ma) on a wall, plane or shape.
+Law wall_law(const LsdemSettings& s, double friction_scale, const Material& ma, const LsdemEngine::Body& A) {
+  Law L = base_law(s);
+  L.kn = s.wall_kn;
+  L.mu = ma.wall_friction * friction_scale;
+  L.mstar = A.m;
+  if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(A.sd->r_eq);
+  return L;
+}
+
+// The law of grains A and B (materials ma, mb).
+Law grain_law(const LsdemSettings& s, double friction_scale, const Material& ma, const Material& mb,
+              const LsdemEngine::Body& A, const LsdemEngine::Body& B) {
+  Law L = base_law(s);
+  L.kn = s.kn;
+  L.mu = std::min(ma.friction, mb.friction) * friction_scale;
+  L.mstar = A.m * B.m / (A.m + B.m);
+  if (L.hertz) {
+    const double estar = 1.0 / ((1 - ma.poisson * ma.poisson) / ma.young + (1 - mb.poisson * mb.poisson) / mb.young);
+    const double rstar = A.sd->r_eq * B.sd->r_eq / (A.sd->r_eq + B.sd->r_eq);
+    L.khertz = 4.0 / 3.0 * estar * std::sqrt(rstar);
+  }
+  return L;
+}
+
+}  // namespace
+
+// One step's forces: broad phase (grain pairs, then walls), narrow phase, reduction.
+void LsdemEngine::compute_forces(double dt) {
+  const std::vector<Wall> W = walls();
   ++stamp_;
   items_.clear();
-  if (near_valid_ && nb > 1) {
-    double d1 = 0, d2 = 0;  // the two largest displacements since the build
-    for (std::size_t i = 0; i < nb; ++i) {
-      const double d = norm(bodies_[i].x - near_x0_[i]);
-      if (d > d1) {
-        d2 = d1;
-        d1 = d;
-      } else if (d > d2) {
-        d2 = d;
-      }
+  collect_pair_items();
+  const std::size_t npairs = collect_wall_items(W);
+  narrow_phase(W, dt);
+  reduce_forces(W, npairs);
+}
+
+bool LsdemEngine::near_list_stale() const {
+  const std::size_t nb = bodies_.size();
+  if (!near_valid_) return true;
+  if (nb < 2) return false;
+  double d1 = 0, d2 = 0;  // the two largest displacements since the build
+  for (std::size_t i = 0; i < nb; ++i) {
+    const double d = norm(bodies_[i].x - near_x0_[i]);
+    if (d > d1) {
+      d2 = d1;
+      d1 = d;
+    } else if (d > d2) {
+      d2 = d;
     }
-    if (d1 + d2 >= near_skin_) near_valid_ = false;
   }
-  const bool rebuilt = !near_valid_;
+  return d1 + d2 >= near_skin_;
+}
+
+void LsdemEngine::collect_pair_items() {
+  // Broad phase: the Verlet list (build_near) holds every pair whose bounding spheres can
+  // overlap until two grains have together moved farther than its skin.
+  const bool rebuilt = near_list_stale();
   if (rebuilt) build_near();
   for (auto& e : near_) {
     if (norm2(bodies_[e.i].x - bodies_[e.j].x) > e.rr * e.rr) {
@@ -585,6 +761,10 @@ void LsdemEngine::compute_forces(double dt) {
   // States of pairs that left the list at its rebuild (not in reach) go.
   if (rebuilt)
     for (auto h = history_.begin(); h != history_.end();) h = h->second.stamp != stamp_ ? history_.erase(h) : std::next(h);
+}
+
+std::size_t LsdemEngine::collect_wall_items(const std::vector<Wall>& W) {
+  const std::size_t nb = bodies_.size();
   const std::size_t first_wall_item = items_.size();
   for (std::size_t i = 0; i < nb; ++i)
     for (std::size_t k = 0; k < walls_kin_.size(); ++k) {
@@ -614,11 +794,12 @@ void LsdemEngine::compute_forces(double dt) {
     if (it.fresh) h->second = PairState{};
     h->second.stamp = stamp_;
   }
+  return npairs;
+}
 
-  // Narrow phase, in parallel over items; each writes only its own slot.
+void LsdemEngine::narrow_phase(const std::vector<Wall>& W, double dt) {
+  // In parallel over items; each writes only its own slot.
   const long nitems = static_cast<long>(items_.size());
-  const double zeta = s_.damping_ratio;
-  const double lipschitz = std::sqrt(double(dim)) * (1 + 1e-9);
 #pragma omp parallel num_threads(s_.threads)
   {
     std::vector<PenNode> P;
@@ -627,150 +808,37 @@ void LsdemEngine::compute_forces(double dt) {
     for (long ii = 0; ii < nitems; ++ii) {
       Item& it = items_[ii];
       const Body& A = bodies_[it.a];
-      const ShapeData& sa = *A.sd;
       const Material& ma = ctx_.materials[A.material];
+      const std::vector<NodeHist>* old = it.fresh ? nullptr : &it.st->hist;
       P.clear();
-      Law L;
-      L.hertz = s_.contact_law == "hertz";
-      L.ks_ratio = s_.ks_ratio;
-      L.zeta = zeta;
       if (it.b >= 0) {
         const Body& B = it.shape_wall ? walls_kin_[it.b] : bodies_[it.b];
-        const ShapeData& sb = *B.sd;
-        const LevelSetGrid& gb = *sb.grid;
-        const Mat3 RbT = B.R.transposed();
-        const Mat3 Rab = RbT * A.R;
-        const Vec3 tab = RbT * (A.x - B.x);
-        const double rb = sb.radius;
-        const double skin = 0.5 * gb.spacing();
-        PairState& ps = *it.st;
-        const bool had = !it.fresh && ps.has_cand;
-        const double drift =
-            had ? ps.drift + A.moved + B.moved + A.turned * sa.radius + B.turned * (sa.radius + norm(A.x - B.x)) : 0;
-        auto visit = [&](int i) {
-          Vec3 g;
-          const Vec3 y = Rab * sa.nodes[i] + tab;
-          const double phi = gb.value_gradient(y, g);
-          if (phi >= 0) return;
-          const double gn = norm(g);
-          if (!(gn > 0)) return;
-          const Vec3 n = B.R * (g / gn);
-          const Vec3 X = A.R * sa.nodes[i] + A.x;
-          P.push_back({i, -phi, n, X + n * (-0.5 * phi), sa.w[i]});
-        };
-        if (had && lipschitz * drift < skin) {
-          // No node outside the candidates can have reached the partner since the search.
-          ps.drift = drift;
-          for (int i : ps.cand) {
-            ++it.queries;
-            const Vec3 y = Rab * sa.nodes[i] + tab;
-            if (gb.inside_grid(y) && gb.value_inside(y) < 0) visit(i);
-          }
-        } else {
-          ps.cand.clear();
-          ps.drift = 0;
-          ps.has_cand = true;
-          // Full search: descend the master's node tree, pruning subtrees outside the
-          // partner's bounding sphere or box (in its frame) or farther than the skin.
-          int stack[64];
-          int top = 0;
-          if (!sa.clusters.empty() && norm2(B.x - A.x) <= (sa.radius + rb) * (sa.radius + rb)) stack[top++] = 0;
-          while (top > 0) {
-            const auto& c = sa.clusters[stack[--top]];
-            const Vec3 yc = Rab * c.c + tab;
-            const double reach = c.r + skin;
-            if (norm2(yc) > (reach + rb) * (reach + rb)) continue;
-            bool out = false;
-            for (int a = 0; a < dim && !out; ++a) out = yc[a] + reach < sb.box.lo[a] || yc[a] - reach > sb.box.hi[a];
-            if (out) continue;
-            // Each partial derivative of the trilinear interpolant of 1-Lipschitz samples is
-            // a mean of edge slopes in [−1, 1], so |∇φ| ≤ √dim: the whole sphere is farther
-            // than the skin from the partner when φ(centre) > √dim · r + skin.
-            if (c.r > 0.5 * gb.spacing() || c.left >= 0) {
-              ++it.tree_queries;
-              if ((gb.inside_grid(yc) ? gb.value_inside(yc) : gb.value(yc)) > lipschitz * c.r + skin) continue;
-            }
-            if (c.left >= 0) {
-              stack[top++] = c.right;
-              stack[top++] = c.left;
-              continue;
-            }
-            for (int i = c.begin; i < c.end; ++i) {
-              const Vec3 y = Rab * sa.nodes[i] + tab;
-              bool outside = false;
-              for (int a = 0; a < dim && !outside; ++a)
-                outside = y[a] < sb.box.lo[a] - skin || y[a] > sb.box.hi[a] + skin;
-              if (outside) continue;
-              ++it.queries;
-              const double phi = gb.inside_grid(y) ? gb.value_inside(y) : gb.value(y);
-              if (phi >= skin) continue;
-              ps.cand.push_back(i);
-              if (phi < 0) visit(i);
-            }
-          }
-        }
-        const Material& mb = ctx_.materials[B.material];
-        if (it.shape_wall) {
-          L.kn = s_.wall_kn;
-          L.mu = ma.wall_friction * friction_scale_;
-          L.mstar = A.m;
-          if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
-        } else {
-          L.kn = s_.kn;
-          L.mu = std::min(ma.friction, mb.friction) * friction_scale_;
-          L.mstar = A.m * B.m / (A.m + B.m);
-        }
-        if (L.hertz && !it.shape_wall) {
-          const double estar =
-              1.0 / ((1 - ma.poisson * ma.poisson) / ma.young + (1 - mb.poisson * mb.poisson) / mb.young);
-          const double rstar = sa.r_eq * sb.r_eq / (sa.r_eq + sb.r_eq);
-          L.khertz = 4.0 / 3.0 * estar * std::sqrt(rstar);
-        }
+        penetrating_nodes(A, B, it, ctx_.dimension, P);
+        const Law L = it.shape_wall ? wall_law(s_, friction_scale_, ma, A)
+                                    : grain_law(s_, friction_scale_, ma, ctx_.materials[B.material], A, B);
         it.pen = static_cast<long>(P.size());
-        if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, it.fresh ? nullptr : &it.st->hist, hist_new, it);
+        if (!P.empty()) patch_forces(P, L, A, &B, Vec3{}, dt, old, hist_new, it);
       } else {
         const Wall& wl = W[-1 - it.b];
-        int stack[64];
-        int top = 0;
-        if (!sa.clusters.empty()) stack[top++] = 0;
-        while (top > 0) {
-          const auto& c = sa.clusters[stack[--top]];
-          const Vec3 xc = A.R * c.c + A.x;
-          if (dot(xc - wl.point, wl.normal) > c.r) continue;
-          if (c.left >= 0) {
-            stack[top++] = c.right;
-            stack[top++] = c.left;
-            continue;
-          }
-          for (int i = c.begin; i < c.end; ++i) {
-            const Vec3 X = A.R * sa.nodes[i] + A.x;
-            const double s = dot(X - wl.point, wl.normal);
-            ++it.queries;
-            if (s >= 0) continue;
-            P.push_back({i, -s, wl.normal, X + wl.normal * (-0.5 * s), sa.w[i]});
-          }
-        }
-        L.kn = s_.wall_kn;
-        L.mu = ma.wall_friction * friction_scale_;
-        L.mstar = A.m;
-        if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(sa.r_eq);
+        nodes_behind_wall(A, wl, it, P);
+        const Law L = wall_law(s_, friction_scale_, ma, A);
         it.pen = static_cast<long>(P.size());
-        if (!P.empty()) patch_forces(P, L, A, static_cast<const Body*>(nullptr), wl.velocity, dt, it.fresh ? nullptr : &it.st->hist,
-                       hist_new, it);
+        if (!P.empty()) patch_forces(P, L, A, static_cast<const Body*>(nullptr), wl.velocity, dt, old, hist_new, it);
       }
       // The new tangential history replaces the old one (empty when out of contact).
       if (P.empty()) hist_new.clear();
       std::swap(it.st->hist, hist_new);
     }
   }
+}
 
-  // Reduction in the fixed item order.
+void LsdemEngine::apply_body_loads() {
   for (auto& b : bodies_) {
     b.f = ctx_.gravity * (b.m / s_.mass_scale);
     b.t = {};
     if (s_.global_damping > 0) {
       b.f -= b.v * (s_.global_damping * b.m);
-      if (dim == 2) {
+      if (ctx_.dimension == 2) {
         b.t.z -= s_.global_damping * b.Ib(2, 2) * b.w.z;
       } else {
         const Vec3 wb = b.R.transposed() * b.w;
@@ -778,6 +846,11 @@ void LsdemEngine::compute_forces(double dt) {
       }
     }
   }
+}
+
+void LsdemEngine::reduce_forces(const std::vector<Wall>& W, std::size_t npairs) {
+  // Reduction in the fixed item order.
+  apply_body_loads();
   contacts_.clear();
   platen_force_ = 0;
   floor_force_ = 0;
@@ -785,39 +858,13 @@ void LsdemEngine::compute_forces(double dt) {
   for (auto& f : shape_wall_force_) f = {};
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
-    Item& it = items_[k];
+    const Item& it = items_[k];
     if (it.b >= 0) queries += it.queries;
     else wall_checks += it.queries;
     pen += it.pen;
     tree += it.tree_queries;
     if (!it.contact) continue;
-    Body& A = bodies_[it.a];
-    A.f += it.fa;
-    A.t += it.ta;
-    Contact c;
-    c.a = A.id;
-    c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
-    c.normal = normalized(it.normal);
-    c.force = it.fa;
-    c.overlap = it.overlap;
-    if (it.shape_wall) {
-      c.wall = kFirstShapeWall + it.b;
-      shape_wall_force_[it.b] -= it.fa;
-    } else if (it.b >= 0) {
-      Body& B = bodies_[it.b];
-      B.f -= it.fa;
-      B.t += it.tb;
-      c.b = B.id;
-      ++pairs_in_contact;
-    } else {
-      const Wall& wl = W[-1 - it.b];
-      c.wall = wl.id;
-      if (wl.id == kFloor) floor_force_ += dot(it.fa, wl.normal);
-      if (wl.id == kPlaten) platen_force_ += dot(it.fa, wl.normal);
-      if (wl.id >= 0 && wl.id < static_cast<int>(container_wall_force_.size()))
-        container_wall_force_[wl.id] += dot(it.fa, wl.normal);  // inward normal: the push outwards
-    }
-    contacts_.push_back(c);
+    if (apply_contact(it, W)) ++pairs_in_contact;
   }
   // States of grain–wall contacts that no longer overlap go.
   for (auto h = wall_history_.begin(); h != wall_history_.end();)
@@ -831,6 +878,37 @@ void LsdemEngine::compute_forces(double dt) {
   stats_.last_bbox_overlaps = static_cast<long>(npairs);
   stats_.last_contact_pairs = pairs_in_contact;
   stats_.last_node_queries = queries;
+}
+
+bool LsdemEngine::apply_contact(const Item& it, const std::vector<Wall>& W) {
+  Body& A = bodies_[it.a];
+  A.f += it.fa;
+  A.t += it.ta;
+  Contact c;
+  c.a = A.id;
+  c.point = it.fsum > 0 ? it.point / it.fsum : it.point;
+  c.normal = normalized(it.normal);
+  c.force = it.fa;
+  c.overlap = it.overlap;
+  const bool grain_pair = !it.shape_wall && it.b >= 0;
+  if (it.shape_wall) {
+    c.wall = kFirstShapeWall + it.b;
+    shape_wall_force_[it.b] -= it.fa;
+  } else if (it.b >= 0) {
+    Body& B = bodies_[it.b];
+    B.f -= it.fa;
+    B.t += it.tb;
+    c.b = B.id;
+  } else {
+    const Wall& wl = W[-1 - it.b];
+    c.wall = wl.id;
+    if (wl.id == kFloor) floor_force_ += dot(it.fa, wl.normal);
+    if (wl.id == kPlaten) platen_force_ += dot(it.fa, wl.normal);
+    if (wl.id >= 0 && wl.id < static_cast<int>(container_wall_force_.size()))
+      container_wall_force_[wl.id] += dot(it.fa, wl.normal);  // inward normal: the push outwards
+  }
+  contacts_.push_back(c);
+  return grain_pair;
 }
 
 void LsdemEngine::integrate(double dt) {
@@ -923,103 +1001,127 @@ bool LsdemEngine::save_state(nlohmann::json& out) const {
   return true;
 }
 
-void LsdemEngine::restore_state(const nlohmann::json& j) {
+// Reads the checkpointed engine state; every error names the place (`at`) being read.
+struct LsdemEngine::StateReader {
   using J = nlohmann::json;
-  std::string at = "";
-  auto fail = [&](const std::string& msg) -> void {
+  std::string at;
+  [[noreturn]] void fail(const std::string& msg) const {
     throw std::invalid_argument("lsdem engine state" + (at.empty() ? std::string() : " at " + at) + ": " + msg);
-  };
-  auto num = [&](const J& v) {
+  }
+  double num(const J& v) const {
     if (!v.is_number() || !std::isfinite(v.get<double>())) fail("expected a finite number, got " + v.dump());
     return v.get<double>();
-  };
-  auto integer = [&](const J& v) {
+  }
+  long integer(const J& v) const {
     if (!v.is_number_integer()) fail("expected an integer, got " + v.dump());
     return v.get<long>();
-  };
-  auto field = [&](const J& o, const char* k) -> const J& {
+  }
+  const J& field(const J& o, const char* k) const {
     if (!o.is_object() || !o.contains(k)) fail(std::string("missing \"") + k + "\"");
     return o.at(k);
-  };
-  if (!j.is_object()) fail("expected an object");
-  if (!field(j, "engine").is_string() || j.at("engine").get<std::string>() != "lsdem")
-    fail("written by engine " + j.at("engine").dump() + ", not lsdem");
-  if (integer(field(j, "version")) != 1) fail("unknown version " + j.at("version").dump());
-  if (!walls_kin_.empty()) fail("an engine with shape walls cannot be restored");
-  const J& jb = field(j, "bodies");
+  }
+  // Node indices below `nodes`.
+  int node(const J& v, long nodes, const char* what) const {
+    const long n = integer(v);
+    if (n < 0 || n >= nodes) fail(std::string(what) + ": node index out of range");
+    return static_cast<int>(n);
+  }
+};
+
+namespace {
+
+// One saved body [id, x(3), v(3), w(3), q(4), moved, turned] over its current state b.
+void read_body(const LsdemEngine::StateReader& rd, const nlohmann::json& r, LsdemEngine::Body& b) {
+  double v[15];
+  for (int k = 0; k < 15; ++k) v[k] = rd.num(r[k + 1]);
+  b.x = {v[0], v[1], v[2]};
+  b.v = {v[3], v[4], v[5]};
+  b.w = {v[6], v[7], v[8]};
+  b.q = Quat{v[9], v[10], v[11], v[12]};
+  if (std::abs(b.q.w * b.q.w + b.q.x * b.q.x + b.q.y * b.q.y + b.q.z * b.q.z - 1) > 1e-9) rd.fail("quaternion is not a unit");
+  b.R = b.q.matrix();
+  b.moved = v[13];
+  b.turned = v[14];
+}
+
+}  // namespace
+
+std::vector<LsdemEngine::Body> LsdemEngine::read_bodies(StateReader& rd, const nlohmann::json& jb) const {
   if (!jb.is_array() || jb.size() != bodies_.size())
-    fail("expected " + std::to_string(bodies_.size()) + " bodies (the checkpoint's grains), got " +
-         std::to_string(jb.is_array() ? jb.size() : 0));
+    rd.fail("expected " + std::to_string(bodies_.size()) + " bodies (the checkpoint's grains), got " +
+            std::to_string(jb.is_array() ? jb.size() : 0));
   // Bodies in the saved order: the broad phase and the force sums follow it.
   std::vector<Body> order;
   order.reserve(bodies_.size());
   std::vector<char> used(bodies_.size(), 0);
   for (std::size_t i = 0; i < jb.size(); ++i) {
-    at = "bodies/" + std::to_string(i);
-    const J& r = jb[i];
-    if (!r.is_array() || r.size() != 16) fail("expected [id, x(3), v(3), w(3), q(4), moved, turned]");
-    const GrainId id = integer(r[0]);
+    rd.at = "bodies/" + std::to_string(i);
+    const nlohmann::json& r = jb[i];
+    if (!r.is_array() || r.size() != 16) rd.fail("expected [id, x(3), v(3), w(3), q(4), moved, turned]");
+    const GrainId id = rd.integer(r[0]);
     auto it = index_.find(id);
-    if (it == index_.end() || used[it->second]) fail("grain " + std::to_string(id) + " is not in the checkpoint or listed twice");
+    if (it == index_.end() || used[it->second])
+      rd.fail("grain " + std::to_string(id) + " is not in the checkpoint or listed twice");
     used[it->second] = 1;
     Body b = bodies_[it->second];
-    double v[15];
-    for (int k = 0; k < 15; ++k) v[k] = num(r[k + 1]);
-    b.x = {v[0], v[1], v[2]};
-    b.v = {v[3], v[4], v[5]};
-    b.w = {v[6], v[7], v[8]};
-    b.q = Quat{v[9], v[10], v[11], v[12]};
-    if (std::abs(b.q.w * b.q.w + b.q.x * b.q.x + b.q.y * b.q.y + b.q.z * b.q.z - 1) > 1e-9) fail("quaternion is not a unit");
-    b.R = b.q.matrix();
-    b.moved = v[13];
-    b.turned = v[14];
+    read_body(rd, r, b);
     order.push_back(b);
   }
-  at = "pairs";
-  const J& jp = field(j, "pairs");
-  if (!jp.is_array()) fail("expected an array");
-  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> hist;
-  at = "stamp";
-  const long stamp = integer(field(j, "stamp"));
-  at = "pairs";
-  for (std::size_t i = 0; i < jp.size(); ++i) {
-    at = "pairs/" + std::to_string(i);
-    const J& p = jp[i];
-    const J& key = field(p, "key");
-    if (!key.is_array() || key.size() != 2) fail("key: expected [master id, partner id]");
-    const std::pair<GrainId, GrainId> k{integer(key[0]), integer(key[1])};
-    if (!index_.count(k.first) || (k.second >= 0 && !index_.count(k.second)))
-      fail("key names a grain that is not in the checkpoint");
-    PairState st;
-    st.stamp = integer(field(p, "stamp"));
-    st.drift = num(field(p, "drift"));
-    if (!field(p, "has_cand").is_boolean()) fail("has_cand: expected true or false");
-    st.has_cand = p.at("has_cand").get<bool>();
-    const std::size_t nodes = bodies_[index_.at(k.first)].sd->nodes.size();
-    const J& cand = field(p, "cand");
-    if (!cand.is_array()) fail("cand: expected an array of node indices");
-    for (const auto& c : cand) {
-      const long n = integer(c);
-      if (n < 0 || n >= static_cast<long>(nodes)) fail("cand: node index out of range");
-      st.cand.push_back(static_cast<int>(n));
-    }
-    const J& h = field(p, "hist");
-    if (!h.is_array()) fail("hist: expected an array of [node, fx, fy, fz]");
-    for (const auto& e : h) {
-      if (!e.is_array() || e.size() != 4) fail("hist: expected [node, fx, fy, fz]");
-      const long n = integer(e[0]);
-      if (n < 0 || n >= static_cast<long>(nodes)) fail("hist: node index out of range");
-      st.hist.push_back({static_cast<int>(n), Vec3{num(e[1]), num(e[2]), num(e[3])}});
-    }
-    if (!hist.emplace(k, std::move(st)).second) fail("pair listed twice");
+  return order;
+}
+
+std::pair<std::pair<GrainId, GrainId>, LsdemEngine::PairState> LsdemEngine::read_pair(const StateReader& rd,
+                                                                                    const nlohmann::json& p) const {
+  const nlohmann::json& key = rd.field(p, "key");
+  if (!key.is_array() || key.size() != 2) rd.fail("key: expected [master id, partner id]");
+  const std::pair<GrainId, GrainId> k{rd.integer(key[0]), rd.integer(key[1])};
+  if (!index_.count(k.first) || (k.second >= 0 && !index_.count(k.second)))
+    rd.fail("key names a grain that is not in the checkpoint");
+  PairState st;
+  st.stamp = rd.integer(rd.field(p, "stamp"));
+  st.drift = rd.num(rd.field(p, "drift"));
+  if (!rd.field(p, "has_cand").is_boolean()) rd.fail("has_cand: expected true or false");
+  st.has_cand = p.at("has_cand").get<bool>();
+  const long nodes = static_cast<long>(bodies_[index_.at(k.first)].sd->nodes.size());
+  const nlohmann::json& cand = rd.field(p, "cand");
+  if (!cand.is_array()) rd.fail("cand: expected an array of node indices");
+  for (const auto& c : cand) st.cand.push_back(rd.node(c, nodes, "cand"));
+  const nlohmann::json& h = rd.field(p, "hist");
+  if (!h.is_array()) rd.fail("hist: expected an array of [node, fx, fy, fz]");
+  for (const auto& e : h) {
+    if (!e.is_array() || e.size() != 4) rd.fail("hist: expected [node, fx, fy, fz]");
+    const int n = rd.node(e[0], nodes, "hist");
+    st.hist.push_back({n, Vec3{rd.num(e[1]), rd.num(e[2]), rd.num(e[3])}});
   }
-  at = "platen";
-  const J& pl = field(j, "platen");
-  if (!pl.is_array() || pl.size() != 2) fail("expected [position, velocity]");
-  const double z = num(pl[0]), vz = num(pl[1]);
-  at = "";
-  const double fs = num(field(j, "friction_scale"));
-  const double pf = num(field(j, "platen_force")), ff = num(field(j, "floor_force"));
+  return {k, std::move(st)};
+}
+
+void LsdemEngine::restore_state(const nlohmann::json& j) {
+  using J = nlohmann::json;
+  StateReader rd;
+  if (!j.is_object()) rd.fail("expected an object");
+  if (!rd.field(j, "engine").is_string() || j.at("engine").get<std::string>() != "lsdem")
+    rd.fail("written by engine " + j.at("engine").dump() + ", not lsdem");
+  if (rd.integer(rd.field(j, "version")) != 1) rd.fail("unknown version " + j.at("version").dump());
+  if (!walls_kin_.empty()) rd.fail("an engine with shape walls cannot be restored");
+  std::vector<Body> order = read_bodies(rd, rd.field(j, "bodies"));
+  rd.at = "pairs";
+  const J& jp = rd.field(j, "pairs");
+  if (!jp.is_array()) rd.fail("expected an array");
+  std::unordered_map<std::pair<GrainId, GrainId>, PairState, KeyHash> hist;
+  rd.at = "stamp";
+  const long stamp = rd.integer(rd.field(j, "stamp"));
+  for (std::size_t i = 0; i < jp.size(); ++i) {
+    rd.at = "pairs/" + std::to_string(i);
+    if (!hist.insert(read_pair(rd, jp[i])).second) rd.fail("pair listed twice");
+  }
+  rd.at = "platen";
+  const J& pl = rd.field(j, "platen");
+  if (!pl.is_array() || pl.size() != 2) rd.fail("expected [position, velocity]");
+  const double z = rd.num(pl[0]), vz = rd.num(pl[1]);
+  rd.at = "";
+  const double fs = rd.num(rd.field(j, "friction_scale"));
+  const double pf = rd.num(rd.field(j, "platen_force")), ff = rd.num(rd.field(j, "floor_force"));
   // Everything checked: take it.
   bodies_ = std::move(order);
   index_.clear();

@@ -175,6 +175,7 @@ class LsdemEngine final : public Engine {
   struct ShapeData;
   struct Body;
   struct Item;
+  struct StateReader;
 
  private:
   struct NodeHist {
@@ -200,6 +201,18 @@ class LsdemEngine final : public Engine {
   using Wall = WallPlane;  // normal points into the box
   ShapeData& shape_data(const Shape::Ptr& s);
   void compute_forces(double dt);
+  // The steps of compute_forces. Work items: grain pairs in reach (their states kept,
+  // refreshed or dropped); grains near a shape wall, then near a plane wall (returns the
+  // number of items before the plane walls); the narrow phase over the items; the
+  // reduction in item order (gravity and global damping first; apply_contact adds one
+  // item's forces and contact, true for a grain pair), and the counters.
+  bool near_list_stale() const;
+  void collect_pair_items();
+  std::size_t collect_wall_items(const std::vector<WallPlane>& walls);
+  void narrow_phase(const std::vector<WallPlane>& walls, double dt);
+  void apply_body_loads();
+  void reduce_forces(const std::vector<WallPlane>& walls, std::size_t npairs);
+  bool apply_contact(const Item& item, const std::vector<WallPlane>& walls);
   void integrate(double dt);
   std::vector<Wall> walls() const;
   int up() const { return ctx_.dimension == 3 ? 2 : 1; }
@@ -234,6 +247,9 @@ class LsdemEngine final : public Engine {
   double near_skin_ = 0;
   bool near_valid_ = false;
   void build_near();
+  // restore_state's readers: the saved bodies in their saved order, one pair's state.
+  std::vector<Body> read_bodies(StateReader& reader, const nlohmann::json& bodies) const;
+  std::pair<std::pair<GrainId, GrainId>, PairState> read_pair(const StateReader& reader, const nlohmann::json& pair) const;
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
   PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly

@@ -1,12 +1,11 @@
-// ODE adapter. Units: ODE sees lengths multiplied by `scale` (a grain ≈ 1 unit; ODE's and
-// libccd's tolerances are absolute lengths), seconds and kilograms. Hence
-// internal velocity = scale·v, force = scale·F, inertia = scale²·I; every value leaves
-// through the same factors. With the automatic scale a power of two the conversions are
-// exact. Each body's origin is its centre of mass (dBodySetMass needs it there); the geometry
-// is the shape's convex hull in that frame, or for a concave polyhedron a few convex pieces
-// that cover it (one dConvex geom each on the body; the near callback skips two pieces of one
-// grain).
+// ODE adapter: ODE's bodies, geoms, contact joints and force read-out under the shared rules
+// of backends/rigid/RigidWorld.h (units: ODE sees lengths × scale, seconds and kilograms;
+// libccd's tolerances are absolute lengths too). Each body's origin is its centre of mass
+// (dBodySetMass needs it there); the geometry is the shape's convex hull in that frame, or
+// for a concave polyhedron a few convex pieces that cover it (one dConvex geom each on the
+// body; the near callback skips two pieces of one grain).
 #include "backends/ode/OdeEngine.h"
+#include "backends/rigid/RigidWorld.h"
 
 #include <ode/ode.h>
 
@@ -24,7 +23,6 @@
 
 #include "core/Platen.h"
 #include "base/Format.h"
-#include "geometry/SymmetricEigen.h"
 
 // ode/precision.h picks dDOUBLE unless dIDESINGLE is set; the build states dIDEDOUBLE and
 // configure checks that ode.pc was built with dDOUBLE.
@@ -134,11 +132,8 @@ void fill_convex(const TriMesh& hull, const Vec3& origin, double scale, ConvexDa
   out.plane_count = static_cast<unsigned>(faces.size());
 }
 
-// ODE data shared by every grain of one Shape.
-struct ShapeEntry {
-  Shape::Ptr shape;
-  Vec3 centroid;        // shape frame, SI
-  Mat3 inertia;         // about the centroid, per unit density, SI (m⁵)
+// ODE data shared by every grain of one Shape (its inertia about the centroid).
+struct ShapeEntry : RigidShapeEntry {
   bool sphere = false;  // exact dSphere
   double radius = 0;    // internal, exact sphere
   double size = 0;      // equivalent diameter, internal
@@ -180,10 +175,6 @@ struct PointRec {
   bool live = true;
   dJointFeedback fb;
 };
-
-void require_finite(const Vec3& v, const char* what, GrainId id) {
-  if (!is_finite(v)) throw std::invalid_argument("ode: grain " + std::to_string(id) + " has a non-finite " + what);
-}
 
 // World-frame planes and vertices of a convex geom.
 struct WorldConvex {
@@ -254,21 +245,14 @@ std::vector<P2> clip_polygon(std::vector<P2> subject, const std::vector<P2>& cli
   return subject;
 }
 
-}  // namespace
-
-struct OdeEngine::Impl {
+struct OdeWorld final : RigidWorld {
+  using Options = OdeEngine::Options;
   Options opt;
-  EngineContext ctx;
 
   dWorldID world = nullptr;
   dSpaceID space = nullptr;
   dJointGroupID contact_group = nullptr;
 
-  double scale = 0;  // internal units per metre; 0 until fixed
-  double ref_length = 1;
-
-  bool have_container = false;
-  Container container;
   std::vector<dGeomID> walls;
   std::vector<GeomTag> wall_tags;  // one per wall (reserved: geoms point into it)
   GeomTag platen_tag;
@@ -276,21 +260,14 @@ struct OdeEngine::Impl {
   dBodyID platen_body = nullptr;
   dGeomID platen_geom = nullptr;
   dJointID platen_slider = nullptr;
-  double platen_half_thickness = 0;  // internal
-  PlatenDriver driver;
-  bool platen_dynamic = false;
 
   std::map<GrainId, std::unique_ptr<GrainBody>> grains;
-  std::map<const Shape*, std::weak_ptr<ShapeEntry>> shape_cache;
+  ShapeCache<ShapeEntry> shapes;
   long concave_as_hull = 0;  // concave polyhedral shapes collided as their convex hull
-  long compound_shapes = 0, compound_pieces = 0, compound_failures = 0;  // concave shapes as convex pieces
-  double total_mass = 0;  // kg, physical
-  double friction_scale = 1;  // set_friction_scale: multiplies μ and the rolling coefficient
-  double last_dt = 0;
   std::uint64_t step_count = 0;
   std::vector<PointRec> recs;
 
-  Impl(const Options& o, const EngineContext& c) : opt(o), ctx(c) {
+  OdeWorld(const Options& o, const EngineContext& c) : RigidWorld("ode", o, c), opt(o) {
     init_ode_for_this_thread();
     std::string why;
     if (!ode_double_precision_ok(&why)) throw std::runtime_error("ode: " + why);
@@ -308,7 +285,7 @@ struct OdeEngine::Impl {
     wall_tags.reserve(8);
   }
 
-  ~Impl() {
+  ~OdeWorld() override {
     dJointGroupDestroy(contact_group);
     for (auto& [id, g] : grains) {
       for (dGeomID geom : g->geoms) dGeomDestroy(geom);
@@ -319,25 +296,23 @@ struct OdeEngine::Impl {
     dWorldDestroy(world);
   }
 
-  // ---------------------------------------------------------------- units
-  double to_int(double si_length) const { return si_length * scale; }
+  void attach_thread() override { init_ode_for_this_thread(); }
 
-  void fix_scale(double first_diameter) {
-    if (scale > 0) return;
-    if (opt.length_scale > 0) {
-      scale = opt.length_scale;
-    } else if (first_diameter > 0) {
-      scale = std::exp2(std::round(std::log2(1.0 / first_diameter)));
-    } else {
-      scale = 1;
-    }
-    ref_length = first_diameter > 0 ? first_diameter * scale : 1.0;
+  // "concave_shapes_as_hull" besides the shared figures: concave polyhedra (hull > 1.02 ×
+  // volume) collided as their hull.
+  std::map<std::string, double> summary_figures() const override {
+    auto figures = RigidWorld::summary_figures();
+    figures["concave_shapes_as_hull"] = static_cast<double>(concave_as_hull);
+    return figures;
+  }
+
+  // ---------------------------------------------------------------- units
+  void scale_fixed() override {
     // Mass scaling slows the dynamics; the weight stays m·g (the platen has no gravity).
     const Vec3 g = ctx.gravity * (scale / opt.mass_scale);
     dWorldSetGravity(world, g.x, g.y, g.z);
     dWorldSetContactMaxCorrectingVel(world, opt.max_correcting_velocity > 0 ? opt.max_correcting_velocity * scale
                                                                              : dInfinity);
-    if (have_container) build_container();
   }
 
   // ---------------------------------------------------------------- container
@@ -353,10 +328,9 @@ struct OdeEngine::Impl {
     platen_body = nullptr;
   }
 
-  void build_container() {
+  void build_container() override {
     remove_container_bodies();
-    for (const WallPlane& w : container_planes(container, 3)) {
-      if (w.id == kPlaten) continue;
+    for (const WallPlane& w : fixed_walls()) {
       dGeomID g = dCreatePlane(space, w.normal.x, w.normal.y, w.normal.z, to_int(w.offset()));
       GeomTag t;
       t.wall = w.id;
@@ -366,17 +340,20 @@ struct OdeEngine::Impl {
       dGeomSetCollideBits(g, kGrainBit);
       walls.push_back(g);
     }
-    // Platen: a thick box a little wider than the container (it only meets grains), bottom
-    // face at the driver's position; a dConvex so flat faces on it get several points.
-    const double lx = to_int(container.lx), ly = to_int(container.ly);
-    platen_half_thickness = 0.25 * std::max(lx, ly);
-    const double hx = 0.55 * lx, hy = 0.55 * ly, hz = platen_half_thickness;
+    build_platen();
+  }
+
+  // The platen box as a dConvex (so flat faces on it get several points) on a body with a
+  // slider along z, enabled while the platen is force-driven.
+  void build_platen() {
+    const PlatenBox box = platen_box();
+    const double hx = box.half_extents.x, hy = box.half_extents.y, hz = box.half_extents.z;
     platen_convex = ConvexData{};
-    TriMesh box;
-    for (int k = 0; k < 8; ++k) box.vertices.push_back({(k & 1) ? hx : -hx, (k & 2) ? hy : -hy, (k & 4) ? hz : -hz});
-    box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                     {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-    fill_convex(box, {}, 1.0, platen_convex);
+    TriMesh mesh;
+    for (int k = 0; k < 8; ++k) mesh.vertices.push_back({(k & 1) ? hx : -hx, (k & 2) ? hy : -hy, (k & 4) ? hz : -hz});
+    mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                      {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+    fill_convex(mesh, {}, 1.0, platen_convex);
     platen_body = dBodyCreate(world);
     platen_geom = dCreateConvex(space, platen_convex.planes.data(), platen_convex.plane_count,
                                 platen_convex.points.data(), platen_convex.point_count, platen_convex.polygons.data());
@@ -388,7 +365,7 @@ struct OdeEngine::Impl {
     dGeomSetData(platen_geom, &platen_tag);
     dGeomSetCategoryBits(platen_geom, kPlatenBit);
     dGeomSetCollideBits(platen_geom, kGrainBit);
-    dBodySetPosition(platen_body, 0.5 * lx, 0.5 * ly, to_int(driver.position()) + hz);
+    dBodySetPosition(platen_body, box.centre.x, box.centre.y, box.centre.z);
     dBodySetGravityMode(platen_body, 0);
     platen_slider = dJointCreateSlider(world, nullptr);
     dJointAttach(platen_slider, platen_body, nullptr);
@@ -396,14 +373,12 @@ struct OdeEngine::Impl {
     configure_platen_body();
   }
 
-  double platen_mass_internal() const {
-    return std::max(crumble::platen_mass(container, total_mass), 1e-30) * opt.mass_scale;
-  }
+  bool has_platen() const override { return platen_body != nullptr; }
 
-  void set_platen_mass() {
+  void set_platen_mass() override {
     dMass m;
     dMassSetZero(&m);
-    const double M = platen_mass_internal();
+    const double M = platen_mass();
     // A box-like inertia; rotation is held by the slider anyway.
     const double I = M * platen_half_thickness * platen_half_thickness;
     dMassSetParameters(&m, M, 0, 0, 0, I, I, I, 0, 0, 0);
@@ -411,7 +386,7 @@ struct OdeEngine::Impl {
   }
 
   // Kinematic body for velocity control; dynamic body on a slider along z for force control.
-  void configure_platen_body() {
+  void configure_platen_body() override {
     const bool dynamic = driver.force_driven();
     const double vz = dBodyGetLinearVel(platen_body)[2];
     if (dynamic) {
@@ -428,78 +403,78 @@ struct OdeEngine::Impl {
     platen_dynamic = dynamic;
   }
 
-  double current_platen_z() const {
-    if (!platen_body || !platen_dynamic) return driver.position();
-    return (dBodyGetPosition(platen_body)[2] - platen_half_thickness) / scale;
-  }
+  double platen_body_z() const override { return dBodyGetPosition(platen_body)[2]; }
 
   // ---------------------------------------------------------------- grains
   std::shared_ptr<ShapeEntry> shape_entry(const Shape::Ptr& shape) {
-    auto it = shape_cache.find(shape.get());
-    if (it != shape_cache.end())
-      if (auto e = it->second.lock()) return e;
-    for (auto i = shape_cache.begin(); i != shape_cache.end();)
-      i = i->second.expired() ? shape_cache.erase(i) : std::next(i);
-    auto e = std::make_shared<ShapeEntry>();
-    e->shape = shape;
-    const MassProperties& mp = shape->mass_properties();
-    if (!(mp.volume > 0)) throw std::invalid_argument("ode: shape " + shape->describe() + " has no volume");
-    e->centroid = mp.centroid;
-    e->inertia = mp.inertia;
-    const auto pa = principal_axes(mp.inertia);
-    if (!(pa.moments.x > 0 && pa.moments.y > 0 && pa.moments.z > 0))
-      throw std::invalid_argument("ode: shape " + shape->describe() + " has a non-positive principal moment");
-    e->size = shape->equivalent_diameter() * scale;
-    if (shape->kind() == ShapeKind::Sphere && opt.exact_spheres) {
-      e->sphere = true;
-      e->radius = shape->parameters().at(0) * scale;
-    } else if (auto pieces = concave_shape_pieces(*shape, opt.concave, "ode", &compound_failures); !pieces.empty()) {
-      // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
-      // concave in the engine) collides as convex pieces whose hulls cover it, as in bullet;
-      // a convex one (within concavity_tolerance of its hull) as its hull, as below.
-      e->pieces.resize(pieces.size());
-      for (std::size_t k = 0; k < pieces.size(); ++k) {
-        const Vec3 c = polyhedron_mass_properties(pieces[k]).centroid;
-        fill_convex(pieces[k], c, scale, e->pieces[k]);
-        e->piece_offsets.push_back((c - e->centroid) * scale);
+    return shapes.get(shape, engine, [&](ShapeEntry& e) {
+      e.size = shape->equivalent_diameter() * scale;
+      if (exact_sphere(*shape)) {
+        e.sphere = true;
+        e.radius = shape->parameters().at(0) * scale;
+      } else if (auto pieces = convex_pieces(*shape); !pieces.empty()) {
+        // A concave polyhedron (Zhu & Zhao 2019 §3.2 keep children with V/V_hull < 0.85
+        // concave in the engine) collides as convex pieces whose hulls cover it, as in bullet;
+        // a convex one (within concavity_tolerance of its hull) as its hull, as below.
+        e.pieces.resize(pieces.size());
+        for (std::size_t k = 0; k < pieces.size(); ++k) {
+          const Vec3 c = polyhedron_mass_properties(pieces[k]).centroid;
+          fill_convex(pieces[k], c, scale, e.pieces[k]);
+          e.piece_offsets.push_back((c - e.centroid) * scale);
+        }
+      } else {
+        fill_convex(shape->convex_hull(), e.centroid, scale, e.convex);
+        note_concave_hull(*shape);
       }
-      ++compound_shapes;
-      compound_pieces += static_cast<long>(pieces.size());
-    } else {
-      fill_convex(shape->convex_hull(), e->centroid, scale, e->convex);
-      // engine.concave_shapes = "convex_hull" (or a shape that could not be cut): a concave
-      // grain collides as its hull, with more solid than the grain has. Said once, and counted.
-      if (shape->kind() == ShapeKind::Polyhedron) {
-        const double ratio = polyhedron_mass_properties(shape->convex_hull()).volume / mp.volume;
-        if (ratio > 1.02 && concave_as_hull++ == 0)
-          std::cerr << "crumble: note: ode collides concave grains as their convex hulls (the first: hull "
-                    << ratio << " × its volume; engine.concave_shapes). Counted in summary.json: "
-                       "engine_concave_shapes_as_hull\n";
-      }
-    }
-    shape_cache[shape.get()] = e;
-    return e;
+    });
   }
 
-  void add_grain(const Grain& g) {
-    if (!g.shape) throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has no shape");
-    if (g.shape->dimension() != 3)
-      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has a 2D shape; the engine is 3D");
-    if (g.material < 0 || g.material >= static_cast<int>(ctx.materials.size()))
-      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has material index " +
-                                  std::to_string(g.material) + " out of range");
-    if (grains.count(g.id)) throw std::invalid_argument("ode: grain id " + std::to_string(g.id) + " added twice");
-    require_finite(g.position, "position", g.id);
-    require_finite(g.velocity, "velocity", g.id);
-    require_finite(g.angular_velocity, "angular velocity", g.id);
-    const double qn = std::sqrt(g.orientation.w * g.orientation.w + g.orientation.x * g.orientation.x +
-                                g.orientation.y * g.orientation.y + g.orientation.z * g.orientation.z);
-    if (!(qn > 0) || !std::isfinite(qn))
-      throw std::invalid_argument("ode: grain " + std::to_string(g.id) + " has an invalid orientation");
-    init_ode_for_this_thread();
-    fix_scale(g.shape->equivalent_diameter());
+  // engine.concave_shapes = "convex_hull" (or a shape that could not be cut): a concave
+  // grain collides as its hull, with more solid than the grain has. Said once, and counted.
+  void note_concave_hull(const Shape& shape) {
+    if (shape.kind() != ShapeKind::Polyhedron) return;
+    const double ratio = polyhedron_mass_properties(shape.convex_hull()).volume / shape.mass_properties().volume;
+    if (ratio > 1.02 && concave_as_hull++ == 0)
+      std::cerr << "crumble: note: ode collides concave grains as their convex hulls (the first: hull " << ratio
+                << " × its volume; engine.concave_shapes). Counted in summary.json: "
+                   "engine_concave_shapes_as_hull\n";
+  }
 
-    const Material& mat = ctx.materials[g.material];
+  bool has_grain(GrainId id) const override { return grains.count(id) != 0; }
+  std::size_t grain_count() const override { return grains.size(); }
+
+  // The grain's geoms (its hull or exact sphere, or one per convex piece) on its body.
+  void add_geoms(GrainBody& gb, const Grain& g) {
+    const ShapeEntry& e = *gb.entry;
+    GeomTag tag;
+    tag.id = g.id;
+    tag.material = g.material;
+    tag.size = e.size;
+    gb.tags.assign(std::max<std::size_t>(1, e.pieces.size()), tag);
+    auto add_convex = [&](const ConvexData& c) {
+      gb.tags[gb.geoms.size()].convex = &c;
+      gb.geoms.push_back(
+          dCreateConvex(space, c.planes.data(), c.plane_count, c.points.data(), c.point_count, c.polygons.data()));
+    };
+    if (e.sphere) {
+      gb.geoms.push_back(dCreateSphere(space, e.radius));
+    } else if (e.pieces.empty()) {
+      add_convex(e.convex);
+    } else {
+      for (const ConvexData& c : e.pieces) add_convex(c);
+    }
+    for (std::size_t k = 0; k < gb.geoms.size(); ++k) {
+      dGeomID geom = gb.geoms[k];
+      dGeomSetBody(geom, gb.body);
+      if (!e.piece_offsets.empty())
+        dGeomSetOffsetPosition(geom, e.piece_offsets[k].x, e.piece_offsets[k].y, e.piece_offsets[k].z);
+      dGeomSetData(geom, &gb.tags[k]);
+      dGeomSetCategoryBits(geom, kGrainBit);
+      dGeomSetCollideBits(geom, kGrainBit | kWallBit | kPlatenBit);
+    }
+  }
+
+  double add_body(const Grain& g, const Material& mat) override {
     auto gb = std::make_unique<GrainBody>();
     gb->entry = shape_entry(g.shape);
     const ShapeEntry& e = *gb->entry;
@@ -510,58 +485,29 @@ struct OdeEngine::Impl {
     const Mat3 I = e.inertia * (mat.density * opt.mass_scale * scale * scale);
     dMassSetParameters(&m, gb->mass * opt.mass_scale, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
     dBodySetMass(gb->body, &m);
-    GeomTag tag;
-    tag.id = g.id;
-    tag.material = g.material;
-    tag.size = e.size;
-    gb->tags.assign(std::max<std::size_t>(1, e.pieces.size()), tag);
-    auto add_convex = [&](const ConvexData& c) {
-      gb->tags[gb->geoms.size()].convex = &c;
-      gb->geoms.push_back(
-          dCreateConvex(space, c.planes.data(), c.plane_count, c.points.data(), c.point_count, c.polygons.data()));
-    };
-    if (e.sphere) {
-      gb->geoms.push_back(dCreateSphere(space, e.radius));
-    } else if (e.pieces.empty()) {
-      add_convex(e.convex);
-    } else {
-      for (const ConvexData& c : e.pieces) add_convex(c);
-    }
-    for (std::size_t k = 0; k < gb->geoms.size(); ++k) {
-      dGeomID geom = gb->geoms[k];
-      dGeomSetBody(geom, gb->body);
-      if (!e.piece_offsets.empty())
-        dGeomSetOffsetPosition(geom, e.piece_offsets[k].x, e.piece_offsets[k].y, e.piece_offsets[k].z);
-      dGeomSetData(geom, &gb->tags[k]);
-      dGeomSetCategoryBits(geom, kGrainBit);
-      dGeomSetCollideBits(geom, kGrainBit | kWallBit | kPlatenBit);
-    }
-    const Quat q = g.orientation.normalized();
-    const Vec3 arm = q.rotate(e.centroid);
-    const Vec3 com = (g.position + arm) * scale;
-    dBodySetPosition(gb->body, com.x, com.y, com.z);
+    add_geoms(*gb, g);
+    const BodyMotion start = initial_motion(g, e.centroid);
+    const Quat& q = start.orientation;
+    dBodySetPosition(gb->body, start.com.x, start.com.y, start.com.z);
     const dQuaternion dq = {q.w, q.x, q.y, q.z};
     dBodySetQuaternion(gb->body, dq);
-    const Vec3 v = (g.velocity + cross(g.angular_velocity, arm)) * scale;
-    dBodySetLinearVel(gb->body, v.x, v.y, v.z);
+    dBodySetLinearVel(gb->body, start.velocity.x, start.velocity.y, start.velocity.z);
     dBodySetAngularVel(gb->body, g.angular_velocity.x, g.angular_velocity.y, g.angular_velocity.z);
-    total_mass += gb->mass;
+    const double mass = gb->mass;
     grains.emplace(g.id, std::move(gb));
-    if (platen_body && platen_dynamic && container.platen_mass <= 0) set_platen_mass();
+    return mass;
   }
 
-  void remove_grain(GrainId id) {
+  double remove_body(GrainId id) override {
     auto it = grains.find(id);
-    if (it == grains.end()) throw std::invalid_argument("ode: remove_grain: unknown grain id " + std::to_string(id));
     // Its contact joints go to limbo with the body; their records no longer count.
     for (auto& r : recs)
       if (r.a_id == id || r.b_id == id) r.live = false;
     for (dGeomID geom : it->second->geoms) dGeomDestroy(geom);
     dBodyDestroy(it->second->body);
-    total_mass -= it->second->mass;
+    const double mass = it->second->mass;
     grains.erase(it);
-    if (grains.empty()) total_mass = 0;
-    if (platen_body && platen_dynamic && container.platen_mass <= 0) set_platen_mass();
+    return mass;
   }
 
   // ---------------------------------------------------------------- contacts
@@ -678,7 +624,7 @@ struct OdeEngine::Impl {
     return count >= 2 ? count : 0;
   }
 
-  static void near_callback(void* data, dGeomID o1, dGeomID o2) { static_cast<Impl*>(data)->near(o1, o2); }
+  static void near_callback(void* data, dGeomID o1, dGeomID o2) { static_cast<OdeWorld*>(data)->near(o1, o2); }
 
   void near(dGeomID o1, dGeomID o2) {
     const auto* t1 = static_cast<const GeomTag*>(dGeomGetData(o1));
@@ -734,11 +680,7 @@ struct OdeEngine::Impl {
   }
 
   // ---------------------------------------------------------------- stepping
-  void step(double dt) {
-    if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("ode: step needs a finite dt > 0");
-    if (scale <= 0) fix_scale(0);
-    if (!have_container) throw std::logic_error("ode: step() before set_container()");
-    init_ode_for_this_thread();
+  void advance(double dt) override {
     dJointGroupEmpty(contact_group);
     recs.clear();
     if (platen_dynamic) {
@@ -746,10 +688,10 @@ struct OdeEngine::Impl {
     } else {
       // Kinematic: starts the step where the driver has it, moving at the command.
       const dReal* p = dBodyGetPosition(platen_body);
-      dBodySetPosition(platen_body, p[0], p[1], to_int(driver.position()) + platen_half_thickness);
+      dBodySetPosition(platen_body, p[0], p[1], platen_centre_z());
       dBodySetLinearVel(platen_body, 0, 0, driver.command().value * scale);
     }
-    dSpaceCollide(space, this, &Impl::near_callback);
+    dSpaceCollide(space, this, &OdeWorld::near_callback);
     for (auto& r : recs) {
       dJointID j = dJointCreateContact(world, contact_group, &r.contact);
       dBodyID b1 = dGeomGetBody(r.contact.geom.g1), b2 = dGeomGetBody(r.contact.geom.g2);
@@ -760,19 +702,15 @@ struct OdeEngine::Impl {
     // depends only on the scenario seed and the step.
     dRandSetSeed(static_cast<unsigned long>(splitmix64(ctx.seed ^ splitmix64(step_count))));
     dWorldQuickStep(world, dt);
-    last_dt = dt;
     ++step_count;
     if (platen_dynamic) {
-      driver.sync(current_platen_z(), dBodyGetLinearVel(platen_body)[2] / scale);
+      sync_platen(dBodyGetLinearVel(platen_body)[2]);
     } else {
       driver.advance(dt, 0, 0);
       const dReal* p = dBodyGetPosition(platen_body);
-      dBodySetPosition(platen_body, p[0], p[1], to_int(driver.position()) + platen_half_thickness);
+      dBodySetPosition(platen_body, p[0], p[1], platen_centre_z());
     }
   }
-
-  // Force (SI) on grain a of record r, and the sum of the platen's / floor's vertical forces.
-  Vec3 force_si(const PointRec& r) const { return vec(r.fb.f1) / scale; }
 
   // Force of the wall on the grains (SI), summed over the wall's contact points.
   Vec3 wall_force_on_grains(int wall) const {
@@ -783,7 +721,44 @@ struct OdeEngine::Impl {
   }
   double wall_force_z(int wall) const { return wall_force_on_grains(wall).z; }
 
-  std::vector<Contact> contacts() const {
+  double platen_force() const override { return -wall_force_z(kPlaten); }  // up on the platen
+  double floor_force() const override { return wall_force_z(kFloor); }     // grains push it down
+  double wall_force(int wall) const override {
+    if (wall < kFloor || wall > kWallYMax) return 0;
+    // The wall pushes the grains along its inward normal; they push it back outwards.
+    return dot(wall_force_on_grains(wall), wall_inward_normal(wall, 3));
+  }
+
+  // The Contact of the live points recs[i, j) of one pair, if they carried a positive
+  // normal force: force = the sum of the joint forces on `a`, point = the normal-force-
+  // weighted mean, overlap = the deepest point's depth.
+  bool pair_points_contact(std::size_t i, std::size_t j, Contact& c) const {
+    Vec3 f, point, normal, couple;
+    double fn_sum = 0, depth = 0;
+    for (std::size_t k = i; k < j; ++k) {
+      const PointRec& r = recs[k];
+      const Vec3 fk = vec(r.fb.f1);
+      // The joint's torque on the grain about its centre, less the moment of its force: the
+      // rolling-resistance couple (dContactRolling).
+      if (const dBodyID b = dGeomGetBody(r.contact.geom.g1))
+        couple = couple + vec(r.fb.t1) - cross(vec(r.contact.geom.pos) - vec(dBodyGetPosition(b)), fk);
+      const Vec3 nk = vec(r.contact.geom.normal);
+      const double fn = std::max(dot(fk, nk), 0.0);
+      f = f + fk;
+      point = point + vec(r.contact.geom.pos) * fn;
+      normal = normal + nk * fn;
+      fn_sum += fn;
+      depth = std::max(depth, static_cast<double>(r.contact.geom.depth));
+    }
+    if (!(fn_sum > 0)) return false;  // touching without force: not an active contact
+    const PointRec& r0 = recs[i];
+    const PairSide other = r0.b_id >= 0 ? PairSide{r0.b_id, -1} : PairSide{-1, r0.wall};
+    c = pair_contact({r0.a_id, -1}, other, f, scale, couple, scale * scale, normalized(normal),
+                     point / (fn_sum * scale), depth / scale);
+    return true;
+  }
+
+  std::vector<Contact> contacts() const override {
     std::vector<Contact> out;
     // Points of one pair are consecutive (one dCollide call each).
     for (std::size_t i = 0; i < recs.size();) {
@@ -791,175 +766,71 @@ struct OdeEngine::Impl {
       while (j < recs.size() && recs[j].contact.geom.g1 == recs[i].contact.geom.g1 &&
              recs[j].contact.geom.g2 == recs[i].contact.geom.g2)
         ++j;
-      if (!recs[i].live) {
-        i = j;
-        continue;
-      }
-      Vec3 f, point, normal, couple;
-      double fn_sum = 0, depth = 0;
-      for (std::size_t k = i; k < j; ++k) {
-        const PointRec& r = recs[k];
-        const Vec3 fk = vec(r.fb.f1);
-        // The joint's torque on the grain about its centre, less the moment of its force: the
-        // rolling-resistance couple (dContactRolling).
-        if (const dBodyID b = dGeomGetBody(r.contact.geom.g1))
-          couple = couple + vec(r.fb.t1) - cross(vec(r.contact.geom.pos) - vec(dBodyGetPosition(b)), fk);
-        const Vec3 nk = vec(r.contact.geom.normal);
-        const double fn = std::max(dot(fk, nk), 0.0);
-        f = f + fk;
-        point = point + vec(r.contact.geom.pos) * fn;
-        normal = normal + nk * fn;
-        fn_sum += fn;
-        depth = std::max(depth, static_cast<double>(r.contact.geom.depth));
-      }
-      const PointRec& r0 = recs[i];
+      if (Contact c; recs[i].live && pair_points_contact(i, j, c)) out.push_back(c);
       i = j;
-      if (!(fn_sum > 0)) continue;  // touching without force: not an active contact
-      Contact c;
-      bool flip = false;
-      c.a = r0.a_id;
-      if (r0.b_id >= 0) {
-        flip = r0.b_id < r0.a_id;  // grain pair once, `a` the smaller id
-        c.a = flip ? r0.b_id : r0.a_id;
-        c.b = flip ? r0.a_id : r0.b_id;
-      } else {
-        c.wall = r0.wall;
-      }
-      const double sgn = flip ? -1.0 : 1.0;
-      c.force = f * (sgn / scale);
-      c.torque = couple * (sgn / (scale * scale));
-      c.normal = normalized(normal) * sgn;
-      c.point = point / (fn_sum * scale);
-      c.overlap = depth / scale;
-      out.push_back(c);
     }
     return out;
   }
 
-  void read_state(std::span<Grain> gs) const {
-    for (auto& g : gs) {
-      auto it = grains.find(g.id);
-      if (it == grains.end()) continue;
-      const GrainBody& gb = *it->second;
-      const dReal* q = dBodyGetQuaternion(gb.body);
-      const Quat qq = Quat{q[0], q[1], q[2], q[3]}.normalized();
-      const Vec3 com = vec(dBodyGetPosition(gb.body)) / scale;
-      const Vec3 arm = qq.rotate(gb.entry->centroid);
-      const Vec3 w = vec(dBodyGetAngularVel(gb.body));
-      g.orientation = qq;
-      g.position = com - arm;
-      g.angular_velocity = w;
-      g.velocity = vec(dBodyGetLinearVel(gb.body)) / scale - cross(w, arm);
-    }
-  }
-
-  void set_container(const Container& c) {
-    require_closed_box(c, "ode");
-    container = c;
-    have_container = true;
-    driver.reset(c.height);
-    if (scale > 0) build_container();
-  }
-
-  void set_platen(const PlatenCommand& cmd) {
-    if (!std::isfinite(cmd.value)) throw std::invalid_argument("ode: platen command value is not finite");
-    const bool mode_change = cmd.mode != driver.command().mode;
-    driver.set_command(cmd);
-    if (platen_body && mode_change) configure_platen_body();
+  bool body_motion(GrainId id, BodyMotion& m, Vec3& centroid) const override {
+    auto it = grains.find(id);
+    if (it == grains.end()) return false;
+    const GrainBody& gb = *it->second;
+    const dReal* q = dBodyGetQuaternion(gb.body);
+    m.orientation = Quat{q[0], q[1], q[2], q[3]}.normalized();
+    m.com = vec(dBodyGetPosition(gb.body));
+    m.velocity = vec(dBodyGetLinearVel(gb.body));
+    m.angular_velocity = vec(dBodyGetAngularVel(gb.body));
+    centroid = gb.entry->centroid;
+    return true;
   }
 };
+
+}  // namespace
 
 // ------------------------------------------------------------------ OdeEngine
 
 const OptionTable& ode_options() {
-  static const OptionTable t = [] {
-    const double inf = std::numeric_limits<double>::infinity();
-    const OdeEngine::Options d;
-    OptionTable table{
-        opt::choice("sphere_representation", "polyhedron", {"polyhedron", "sphere"},
-                    "spheres as their icosphere hull (dConvex) or \"sphere\" (exact dSphere)"),
-        opt::number("length_scale", d.length_scale, 0, inf, "",
-                    "internal units per metre; 0 = the power of two nearest 1/d of the first grain (ODE's and libccd's "
-                    "tolerances are absolute)"),
-        opt::integer("solver_iterations", d.solver_iterations, 1, 1000000, "QuickStep SOR iterations per step"),
-        opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
-        opt::number("erp", d.erp, 0, 1, "",
-                    "contact error reduction (penetration corrected per step); ODE's default 0.2 launches grains at "
-                    "Δt ≈ 5e-5 s"),
-        opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
-        opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
-                    "cap on the velocity that pushes overlapping grains apart; 0 = none"),
-        opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
-                     "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
-                     "this many from the clipped touching faces (1 = libccd's point only)"),
-        opt::positive("mass_scale", d.mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
-    };
-    for (auto& spec : concave_shape_options("one dConvex geom each on the grain's body")) table.push_back(std::move(spec));
-    return table;
-  }();
+  const double inf = std::numeric_limits<double>::infinity();
+  const OdeEngine::Options d;
+  static const OptionTable t = with_concave_shape_options(
+      {
+          rigid_option::sphere_representation("icosphere hull (dConvex)", "dSphere"),
+          rigid_option::length_scale("ODE's and libccd's tolerances are absolute"),
+          rigid_option::solver_iterations("QuickStep SOR iterations per step"),
+          opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
+          rigid_option::erp("contact error reduction (penetration corrected per step); ODE's default 0.2 launches "
+                            "grains at Δt ≈ 5e-5 s"),
+          opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
+          opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
+                      "cap on the velocity that pushes overlapping grains apart; 0 = none"),
+          opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
+                       "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
+                       "this many from the clipped touching faces (1 = libccd's point only)"),
+          rigid_option::mass_scale("mass scaling"),
+      },
+      "one dConvex geom each on the grain's body");
   return t;
 }
 
 OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
-  cfg.string("type", "ode");
-  const crumble::Options r(cfg, ode_options());
-  Options o;
-  o.exact_spheres = r.string("sphere_representation") == "sphere";
-  o.length_scale = r.number("length_scale");
-  o.solver_iterations = static_cast<int>(r.integer("solver_iterations"));
-  o.sor_w = r.number("sor_w");
-  o.erp = r.number("erp");
-  o.cfm = r.number("cfm");
-  o.max_correcting_velocity = r.number("max_correcting_velocity");
-  o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
-  o.mass_scale = r.number("mass_scale");
-  o.concave = read_concave_shape_options(r);
-  return o;
+  return read_rigid_engine_options<Options>(cfg, "ode", ode_options(), [](const crumble::Options& r, Options& o) {
+    o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
+    o.sor_w = r.number("sor_w");
+    o.cfm = r.number("cfm");
+    o.max_correcting_velocity = r.number("max_correcting_velocity");
+  });
 }
 
-OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : impl_(std::make_unique<Impl>(opts, ctx)) {}
-OdeEngine::~OdeEngine() = default;
-
-void OdeEngine::set_container(const Container& c) { impl_->set_container(c); }
-void OdeEngine::add_grain(const Grain& g) { impl_->add_grain(g); }
-bool OdeEngine::set_friction_scale(double scale) {
-  if (!(scale >= 0 && scale <= 1)) return false;
-  impl_->friction_scale = scale;  // ODE builds its contact joints afresh every step
-  return true;
-}
-void OdeEngine::remove_grain(GrainId id) { impl_->remove_grain(id); }
-std::size_t OdeEngine::grain_count() const { return impl_->grains.size(); }
-std::map<std::string, double> OdeEngine::summary_figures() const {
-  return {{"concave_shapes_as_hull", static_cast<double>(impl_->concave_as_hull)},
-          {"compound_shapes", static_cast<double>(impl_->compound_shapes)},
-          {"compound_pieces", static_cast<double>(impl_->compound_pieces)},
-          {"compound_failures", static_cast<double>(impl_->compound_failures)}};
-}
-void OdeEngine::step(double dt) { impl_->step(dt); }
-void OdeEngine::read_state(std::span<Grain> grains) const { impl_->read_state(grains); }
-std::vector<Contact> OdeEngine::contacts() const { return impl_->contacts(); }
-void OdeEngine::set_platen(const PlatenCommand& cmd) { impl_->set_platen(cmd); }
-double OdeEngine::platen_position() const { return impl_->current_platen_z(); }
-double OdeEngine::platen_force() const { return -impl_->wall_force_z(kPlaten); }  // up on the platen
-double OdeEngine::floor_force() const { return impl_->wall_force_z(kFloor); }     // grains push it down
-double OdeEngine::wall_force(int wall) const {
-  if (wall < kFloor || wall > kWallYMax) return 0;
-  // The wall pushes the grains along its inward normal; they push it back outwards.
-  return dot(impl_->wall_force_on_grains(wall), wall_inward_normal(wall, 3));
-}
-double OdeEngine::length_scale() const { return impl_->scale; }
+OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : RigidEngine(std::make_unique<OdeWorld>(opts, ctx)) {}
 
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx) {
-  const auto opts = OdeEngine::read_options(cfg);
-  if (ctx.dimension != 3) cfg.fail("", "the ode engine is 3D only (scenario dimension " + std::to_string(ctx.dimension) + ")");
-  return std::make_unique<OdeEngine>(opts, ctx);
+  return make_rigid_engine<OdeEngine>(cfg, ctx, "ode");
 }
 
+// dReal is double in this translation unit (the static_assert above); whether the linked
+// libode is too is asked of the library itself.
 bool ode_double_precision_ok(std::string* why) {
-  if (sizeof(dReal) != sizeof(double)) {
-    if (why) *why = "dReal is not double in crumble_ode";
-    return false;
-  }
   init_ode_for_this_thread();
   if (!dCheckConfiguration("ODE_double_precision")) {
     if (why) *why = "the linked libode is not the double-precision build";

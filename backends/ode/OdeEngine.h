@@ -49,10 +49,10 @@
 #pragma once
 #include <memory>
 
+#include "backends/rigid/RigidEngine.h"
+#include "backends/rigid/RigidOptions.h"
 #include "core/Config.h"
-#include "core/ConcaveShapes.h"
 #include "core/Options.h"
-#include "core/Engine.h"
 
 namespace crumble {
 
@@ -60,50 +60,22 @@ namespace crumble {
 const OptionTable& ode_options();
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx);
 
-class OdeEngine final : public Engine {
+class OdeEngine final : public RigidEngine {
  public:
-  struct Options {
-    bool exact_spheres = false;
-    double length_scale = 0;
-    int solver_iterations = 100;
-    double sor_w = 1.0;
-    double erp = 0.003;
+  // The shared keys (backends/rigid/RigidOptions.h) and ODE's own.
+  struct Options : RigidOptions {
+    int contacts_per_pair = 4;  // collision: points per pair of polyhedra
+    double sor_w = 1.0;         // QuickStep: over-relaxation, regularisation, correction cap
     double cfm = 1e-9;
     double max_correcting_velocity = 0;
-    int contacts_per_pair = 4;
-    double mass_scale = 1;
-    ConcaveShapeOptions concave;       // "concave_shapes", "concavity_tolerance", "max_convex_pieces"
   };
   static Options read_options(const Config& cfg);
 
   OdeEngine(const Options& opts, const EngineContext& ctx);
-  ~OdeEngine() override;
 
-  std::string name() const override { return "ode"; }
   std::string guard_advice() const override {
     return "Reduce the time step (time_step), raise engine.solver_iterations, or lower loading.max_stress.";
   }
-  void set_container(const Container& c) override;
-  void add_grain(const Grain& g) override;
-  bool set_friction_scale(double scale) override;
-  void remove_grain(GrainId id) override;
-  std::size_t grain_count() const override;
-  void step(double dt) override;
-  void read_state(std::span<Grain> grains) const override;
-  std::vector<Contact> contacts() const override;
-  void set_platen(const PlatenCommand& cmd) override;
-  double platen_position() const override;
-  double platen_force() const override;
-  double floor_force() const override;
-  double wall_force(int wall) const override;
-  // "concave_shapes_as_hull": concave polyhedra (hull > 1.02 × volume) collided as their hull.
-  std::map<std::string, double> summary_figures() const override;
-
-  double length_scale() const;  // internal units per metre (0 until fixed)
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 // True when dReal is double here and the linked libode was built in double precision.

@@ -129,72 +129,21 @@ double BlockBeamModel::load_measure(const Grain&, const Material&, std::span<con
   return f;
 }
 
-BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const {
-  const auto t0 = Clock::now();
-  BreakageAnalysis a;
-  long blocks = 0, beams = 0, steps = 0, broken_beams = 0;
-  double force_at_split = 0;
-  auto finish = [&](const std::string& outcome) {
-    a.outcome = outcome;
-    a.figures = {{"blocks", static_cast<double>(blocks)},
-                 {"beams", static_cast<double>(beams)},
-                 {"steps", static_cast<double>(steps)},
-                 {"broken_beams", static_cast<double>(broken_beams)},
-                 {"force_at_split_N", force_at_split}};
-    a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    return a;
-  };
-  require(g.shape != nullptr, "grain " + std::to_string(g.id) + " has no shape");
-  require(g.shape->dimension() == 3, "needs a 3D grain, got " + g.shape->describe());
-  const double tensile = g.strength.get_or(kTensile, 0), shear = g.strength.get_or(kShear, 0);
-  require(tensile > 0 && shear > 0 && std::isfinite(tensile) && std::isfinite(shear),
-          "grain " + std::to_string(g.id) + " has no beam strength (assign_strength not called?)");
-  require(m.young > 0 && m.poisson > -1 && m.poisson < 0.5, "material needs young > 0 and poisson in (-1, 0.5)");
+// ---------------------------------------------------------------- the analysis
 
-  struct Local {
-    Vec3 point, force;
-  };
-  std::vector<Local> loads;
-  const Quat& q = g.orientation;
-  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-  require(std::isfinite(qn) && qn > 0 && is_finite(g.position), "grain " + std::to_string(g.id) + " has a non-finite pose");
-  const Quat to_body = q.normalized().conjugate();
-  for (const auto& c : contacts) {
-    require(is_finite(c.point) && is_finite(c.force), "non-finite contact point or force on grain " + std::to_string(g.id));
-    if (norm2(c.force) == 0) continue;
-    loads.push_back({to_body.rotate(c.point - g.position), to_body.rotate(c.force)});
-  }
-  for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
-  if (loads.size() < 2) return finish("no_load");
+namespace {
 
-  // Blocks and beams (Liu et al. 2019 §2.1, §2.3).
-  // A shape the mesher cannot fill (or a degenerate block) is an outcome, not an error: the
-  // grain stays as it is and the run goes on.
-  bb::Blocks B;
-  try {
-    B = bb::make_blocks(bb_mesh(*g.shape, o_));
-  } catch (const std::runtime_error&) {
-    return finish("mesh_failed");
-  } catch (const std::invalid_argument&) {
-    return finish("mesh_failed");
-  }
-  blocks = static_cast<long>(B.centroid.size());
-  beams = static_cast<long>(B.beams.size());
-  if (blocks < o_.min_blocks) return finish("too_few_blocks");
-  bb::BeamMaterial bm{m.young, m.young / (2 * (1 + m.poisson)), tensile, shear};
-  bb::BbSystem sys(B, bm, o_.mass_factor);
-
-  // Contact zones: blocks within zone_radius_factor × mean edge of the contact point (at
-  // least the nearest); the zone of the largest force is fixed.
-  std::size_t largest = 0;
-  for (std::size_t k = 1; k < loads.size(); ++k)
-    if (norm2(loads[k].force) > norm2(loads[largest].force)) largest = k;
-  const double zr2 = std::pow(o_.zone_radius_factor * B.mean_edge, 2);
+// Contact zones: blocks within zone_radius_factor × mean edge of the contact point (at
+// least the nearest); the zone of the largest force is fixed, the others share their load.
+void load_zones(bb::BbSystem& sys, const bb::Blocks& B, const std::vector<BodyLoad>& loads, double zone_radius_factor) {
+  const int blocks = static_cast<int>(B.centroid.size());
+  const std::size_t largest = largest_load(loads);
+  const double zr2 = std::pow(zone_radius_factor * B.mean_edge, 2);
   for (std::size_t k = 0; k < loads.size(); ++k) {
     std::vector<int> zone;
     int nearest = 0;
     double best = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < static_cast<int>(blocks); ++i) {
+    for (int i = 0; i < blocks; ++i) {
       const double d2 = norm2(B.centroid[i] - loads[k].point);
       if (d2 <= zr2) zone.push_back(i);
       if (d2 < best) {
@@ -210,88 +159,112 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
         sys.add_load(i, loads[k].force * (1.0 / static_cast<double>(zone.size())));
     }
   }
+}
 
-  // Relaxation under a linear ramp of the load factor, then held.
+// Volume of each of the `count` connected block sets.
+std::vector<double> component_volumes(const bb::Blocks& B, const std::vector<int>& label, int count) {
+  std::vector<double> vol(count, 0.0);
+  for (std::size_t i = 0; i < label.size(); ++i) vol[label[i]] += B.volume[i];
+  return vol;
+}
+
+double sum_volume(const bb::Blocks& B) {
   double total_volume = 0;
   for (double v : B.volume) total_volume += v;
-  auto majors = [&](const std::vector<int>& label, int count) {
-    std::vector<double> vol(count, 0.0);
-    for (std::size_t i = 0; i < label.size(); ++i) vol[label[i]] += B.volume[i];
-    int n = 0;
-    for (double v : vol) n += v >= o_.min_child_fraction * total_volume;
-    return n;
-  };
+  return total_volume;
+}
+
+struct Relaxation {
   std::string outcome = "step_limit";
   bool split = false;
+  long steps = 0;
+  double lambda_at_split = 0;  // the load factor when the grain split
+};
+
+// Relaxation under a linear ramp of the load factor, then held, until two major block sets
+// part (then post_split_steps more), the blocks rest, or max_steps.
+Relaxation relax(bb::BbSystem& sys, const bb::Blocks& B, const BbOptions& o) {
+  const double total_volume = sum_volume(B);
+  Relaxation r;
   long split_step = -1;
   double lambda = 0;
   long broken_seen = 0, last_break = 0;
-  for (long n = 1; n <= o_.max_steps; ++n) {
-    if (split_step < 0) lambda = std::min(1.0, static_cast<double>(n) / static_cast<double>(o_.ramp_steps));
-    if (sys.step(lambda, o_.damping) > 0) last_break = n;
-    steps = n;
+  for (long n = 1; n <= o.max_steps; ++n) {
+    if (split_step < 0) lambda = std::min(1.0, static_cast<double>(n) / static_cast<double>(o.ramp_steps));
+    if (sys.step(lambda, o.damping) > 0) last_break = n;
+    r.steps = n;
     if (split_step >= 0) {
-      if (n - split_step >= o_.post_split_steps) break;
+      if (n - split_step >= o.post_split_steps) break;
       continue;
     }
-    if (n % o_.check_interval != 0) continue;
+    if (n % o.check_interval != 0) continue;
     if (sys.broken() != broken_seen) {
       broken_seen = sys.broken();
       int count = 0;
       const auto label = bb::components(B, sys.broken_flags(), &count);
-      if (count >= 2 && majors(label, count) >= 2) {
-        split = true;
+      int majors = 0;
+      for (double v : component_volumes(B, label, count)) majors += v >= o.min_child_fraction * total_volume;
+      if (count >= 2 && majors >= 2) {
+        r.split = true;
         split_step = n;
-        force_at_split = lambda * a.load;
-        outcome = "split";
-        if (o_.post_split_steps == 0) break;
+        r.lambda_at_split = lambda;
+        r.outcome = "split";
+        if (o.post_split_steps == 0) break;
         continue;
       }
     }
-    if (lambda >= 1.0 && (sys.unbalance() <= o_.rest_tolerance || n - std::max(last_break, o_.ramp_steps) >= o_.quiet_steps)) {
-      outcome = "intact";
+    if (lambda >= 1.0 && (sys.unbalance() <= o.rest_tolerance || n - std::max(last_break, o.ramp_steps) >= o.quiet_steps)) {
+      r.outcome = "intact";
       break;
     }
   }
-  broken_beams = sys.broken();
-  if (!split) return finish(outcome);
+  return r;
+}
 
-  // Pieces: connected block sets; fines join the nearest major piece.
+// The piece of every block: connected block sets at least min_child_fraction of the volume,
+// largest first; fines join the nearest major piece. Sets `pieces` (< 2: no split).
+std::vector<int> block_pieces(const bb::Blocks& B, const std::vector<char>& broken, double min_child_fraction,
+                              int& pieces) {
+  const int blocks = static_cast<int>(B.centroid.size());
   int count = 0;
-  const auto label = bb::components(B, sys.broken_flags(), &count);
-  std::vector<double> vol(count, 0.0);
-  for (int i = 0; i < blocks; ++i) vol[label[i]] += B.volume[i];
+  const auto label = bb::components(B, broken, &count);
+  const std::vector<double> vol = component_volumes(B, label, count);
   std::vector<int> order(count);
   for (int c = 0; c < count; ++c) order[c] = c;
   std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return vol[x] > vol[y]; });
   std::vector<int> major_of(count, -1);
-  int pieces = 0;
+  pieces = 0;
+  const double total_volume = sum_volume(B);
   for (int c : order)
-    if (vol[c] >= o_.min_child_fraction * total_volume) major_of[c] = pieces++;
-  if (pieces < 2) return finish("split_into_fines");
+    if (vol[c] >= min_child_fraction * total_volume) major_of[c] = pieces++;
   std::vector<int> piece(blocks, -1);
+  if (pieces < 2) return piece;
   for (int i = 0; i < blocks; ++i) piece[i] = major_of[label[i]];
-  {
-    std::vector<std::vector<int>> members(count);
-    for (int i = 0; i < blocks; ++i)
-      if (piece[i] < 0) members[label[i]].push_back(i);
-    for (int c = 0; c < count; ++c) {
-      if (members[c].empty()) continue;
-      double best = std::numeric_limits<double>::infinity();
-      int target = -1;
-      for (int i : members[c])
-        for (int j = 0; j < blocks; ++j) {
-          if (major_of[label[j]] < 0) continue;
-          const double d2 = norm2(B.centroid[j] - B.centroid[i]);
-          if (d2 < best || (d2 == best && major_of[label[j]] < target)) {
-            best = d2;
-            target = major_of[label[j]];
-          }
+  std::vector<std::vector<int>> members(count);
+  for (int i = 0; i < blocks; ++i)
+    if (piece[i] < 0) members[label[i]].push_back(i);
+  for (int c = 0; c < count; ++c) {
+    if (members[c].empty()) continue;
+    double best = std::numeric_limits<double>::infinity();
+    int target = -1;
+    for (int i : members[c])
+      for (int j = 0; j < blocks; ++j) {
+        if (major_of[label[j]] < 0) continue;
+        const double d2 = norm2(B.centroid[j] - B.centroid[i]);
+        if (d2 < best || (d2 == best && major_of[label[j]] < target)) {
+          best = d2;
+          target = major_of[label[j]];
         }
-      for (int i : members[c]) piece[i] = target;
-    }
+      }
+    for (int i : members[c]) piece[i] = target;
   }
+  return piece;
+}
 
+// The fracture of the split grain (see BlockBeamModel::analyse in the header).
+PointClusters piece_clusters(const bb::Blocks& B, const std::vector<int>& piece, int pieces,
+                             const std::vector<char>& broken) {
+  const int blocks = static_cast<int>(B.centroid.size());
   PointClusters pc;
   pc.spacing = B.mean_edge;
   pc.clusters = pieces;
@@ -314,7 +287,6 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
     pc.on_surface.push_back(0);
   }
   // Fracture points: centroid and vertices of each broken face between two pieces.
-  const auto& broken = sys.broken_flags();
   for (std::size_t k = 0; k < B.beams.size(); ++k) {
     if (!broken[k]) continue;
     const auto& bmk = B.beams[k];
@@ -325,8 +297,63 @@ BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std:
       for (int v : B.faces[bmk.face].vertices) pc.fracture_points[c].push_back(B.mesh.vertices[v]);
     }
   }
+  return pc;
+}
+
+}  // namespace
+
+BreakageAnalysis BlockBeamModel::analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const {
+  const auto t0 = Clock::now();
+  BreakageAnalysis a;
+  long blocks = 0, beams = 0, steps = 0, broken_beams = 0;
+  double force_at_split = 0;
+  auto finish = [&](const std::string& outcome) {
+    a.outcome = outcome;
+    a.figures = {{"blocks", static_cast<double>(blocks)},
+                 {"beams", static_cast<double>(beams)},
+                 {"steps", static_cast<double>(steps)},
+                 {"broken_beams", static_cast<double>(broken_beams)},
+                 {"force_at_split_N", force_at_split}};
+    a.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return a;
+  };
+  require(g.shape != nullptr, "grain " + std::to_string(g.id) + " has no shape");
+  require(g.shape->dimension() == 3, "needs a 3D grain, got " + g.shape->describe());
+  const double tensile = g.strength.get_or(kTensile, 0), shear = g.strength.get_or(kShear, 0);
+  require(tensile > 0 && shear > 0 && std::isfinite(tensile) && std::isfinite(shear),
+          "grain " + std::to_string(g.id) + " has no beam strength (assign_strength not called?)");
+  require(m.young > 0 && m.poisson > -1 && m.poisson < 0.5, "material needs young > 0 and poisson in (-1, 0.5)");
+  const std::vector<BodyLoad> loads = body_frame_loads(g, contacts, "block_beam");
+  for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
+  if (loads.size() < 2) return finish("no_load");
+
+  // Blocks and beams (Liu et al. 2019 §2.1, §2.3).
+  // A shape the mesher cannot fill (or a degenerate block) is an outcome, not an error: the
+  // grain stays as it is and the run goes on.
+  bb::Blocks B;
+  try {
+    B = bb::make_blocks(bb_mesh(*g.shape, o_));
+  } catch (const std::runtime_error&) {
+    return finish("mesh_failed");
+  } catch (const std::invalid_argument&) {
+    return finish("mesh_failed");
+  }
+  blocks = static_cast<long>(B.centroid.size());
+  beams = static_cast<long>(B.beams.size());
+  if (blocks < o_.min_blocks) return finish("too_few_blocks");
+  bb::BeamMaterial bm{m.young, m.young / (2 * (1 + m.poisson)), tensile, shear};
+  bb::BbSystem sys(B, bm, o_.mass_factor);
+  load_zones(sys, B, loads, o_.zone_radius_factor);
+  const Relaxation r = relax(sys, B, o_);
+  steps = r.steps;
+  if (r.split) force_at_split = r.lambda_at_split * a.load;
+  broken_beams = sys.broken();
+  if (!r.split) return finish(r.outcome);
+  int pieces = 0;
+  const std::vector<int> piece = block_pieces(B, sys.broken_flags(), o_.min_child_fraction, pieces);
+  if (pieces < 2) return finish("split_into_fines");
   a.broken = true;
-  a.fracture = std::move(pc);
+  a.fracture = piece_clusters(B, piece, pieces, sys.broken_flags());
   return finish("split");
 }
 

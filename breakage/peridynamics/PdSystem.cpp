@@ -71,21 +71,25 @@ PdSystem::PdSystem(const Lattice& lattice, const LpsMaterial& mat, double critic
   build_box();
 }
 
-void PdSystem::build_box() {
-  // The bond offsets in use (from the CSR: whatever stencil built the lattice), and the
-  // positive half of them: dz > 0, or dz = 0 and dy > 0, or dz = dy = 0 and dx > 0.
-  const std::size_t n = size();
+namespace {
+
+using HalfOffsets = std::vector<std::pair<std::array<int, 3>, double>>;
+
+// The bond offsets in use (from the CSR: whatever stencil built the lattice), and the
+// positive half of them: dz > 0, or dz = 0 and dy > 0, or dz = dy = 0 and dx > 0, each with
+// its reference length. Sets H, the largest reach of a bond in cells along an axis.
+HalfOffsets half_bond_offsets(const Lattice& L, int& H) {
   std::map<std::array<int, 3>, double> offsets;  // offset → reference length
-  int H = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::int32_t q = L_.offsets[i]; q < L_.offsets[i + 1]; ++q) {
-      const auto& ci = L_.cell[i];
-      const auto& cj = L_.cell[static_cast<std::size_t>(L_.neighbours[q])];
+  H = 0;
+  for (std::size_t i = 0; i < L.size(); ++i)
+    for (std::int32_t q = L.offsets[i]; q < L.offsets[i + 1]; ++q) {
+      const auto& ci = L.cell[i];
+      const auto& cj = L.cell[static_cast<std::size_t>(L.neighbours[q])];
       const std::array<int, 3> d{cj[0] - ci[0], cj[1] - ci[1], cj[2] - ci[2]};
-      offsets.emplace(d, L_.length[q]);
+      offsets.emplace(d, L.length[q]);
       H = std::max({H, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
     }
-  std::vector<std::pair<std::array<int, 3>, double>> half;
+  HalfOffsets half;
   for (const auto& [d, len] : offsets)
     if (d[2] > 0 || (d[2] == 0 && (d[1] > 0 || (d[1] == 0 && d[0] > 0)))) half.emplace_back(d, len);
   // Ordered by dx first: consecutive bonds of a block then add into cells a row or more
@@ -93,28 +97,50 @@ void PdSystem::build_box() {
   std::stable_sort(half.begin(), half.end(), [](const auto& a, const auto& b) {
     return std::array<int, 3>{a.first[0], a.first[2], a.first[1]} < std::array<int, 3>{b.first[0], b.first[2], b.first[1]};
   });
+  return half;
+}
 
+// The CSR entry of the bond i → j, or -1 (rows are sorted by neighbour).
+std::int32_t csr_entry(const Lattice& L, std::int32_t i, std::int32_t j) {
+  const auto* b = L.neighbours.data() + L.offsets[i];
+  const auto* e = L.neighbours.data() + L.offsets[i + 1];
+  const auto* it = std::lower_bound(b, e, j);
+  return it != e && *it == j ? static_cast<std::int32_t>(it - L.neighbours.data()) : -1;
+}
+
+}  // namespace
+
+PdSystem::BoxExtent PdSystem::box_extent(int H) const {
   // The box: the lattice's bounding box, padded by the reach H of a bond on every side and by
   // 3 more cells in +x (a block's last lanes may pass the end of its row).
-  std::array<int, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+  BoxExtent e;
+  e.lo = {INT32_MAX, INT32_MAX, INT32_MAX};
+  std::array<int, 3> hi{INT32_MIN, INT32_MIN, INT32_MIN};
   for (const auto& c : L_.cell)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
-  const std::array<int, 3> org{lo[0] - H, lo[1] - H, lo[2] - H};
-  const std::int64_t nx = hi[0] - lo[0] + 1 + 2 * H + 3, ny = hi[1] - lo[1] + 1 + 2 * H, nz = hi[2] - lo[2] + 1 + 2 * H;
-  if (nx * ny * nz > 200'000'000) throw std::invalid_argument("peridynamics: lattice too large for its box layout");
+    for (int a = 0; a < 3; ++a) e.lo[a] = std::min(e.lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+  e.org = {e.lo[0] - H, e.lo[1] - H, e.lo[2] - H};
+  e.nx = hi[0] - e.lo[0] + 1 + 2 * H + 3;
+  e.ny = hi[1] - e.lo[1] + 1 + 2 * H;
+  e.nz = hi[2] - e.lo[2] + 1 + 2 * H;
+  if (e.nx * e.ny * e.nz > 200'000'000) throw std::invalid_argument("peridynamics: lattice too large for its box layout");
+  return e;
+}
+
+std::vector<std::int32_t> PdSystem::fill_box_cells(const BoxExtent& e) {
+  const std::size_t n = size();
   const auto cell_index = [&](int x, int y, int z) {
-    return ((static_cast<std::int64_t>(z) - org[2]) * ny + (y - org[1])) * nx + (x - org[0]);
+    return ((static_cast<std::int64_t>(z) - e.org[2]) * e.ny + (y - e.org[1])) * e.nx + (x - e.org[0]);
   };
   Box& B = box_;
-  const std::size_t nbox = static_cast<std::size_t>(nx * ny * nz);
+  const std::size_t nbox = static_cast<std::size_t>(e.nx * e.ny * e.nz);
   for (auto* v : {&B.x, &B.y, &B.z, &B.at, &B.b, &B.th, &B.fx, &B.fy, &B.fz}) v->assign(nbox, 0.0);
-  for (std::int64_t z = 0; z < nz; ++z)  // cells without a point keep their reference position
-    for (std::int64_t y = 0; y < ny; ++y)
-      for (std::int64_t x = 0; x < nx; ++x) {
-        const std::size_t c = static_cast<std::size_t>((z * ny + y) * nx + x);
-        B.x[c] = static_cast<double>(x + org[0]) * L_.spacing;
-        B.y[c] = static_cast<double>(y + org[1]) * L_.spacing;
-        B.z[c] = static_cast<double>(z + org[2]) * L_.spacing;
+  for (std::int64_t z = 0; z < e.nz; ++z)  // cells without a point keep their reference position
+    for (std::int64_t y = 0; y < e.ny; ++y)
+      for (std::int64_t x = 0; x < e.nx; ++x) {
+        const std::size_t c = static_cast<std::size_t>((z * e.ny + y) * e.nx + x);
+        B.x[c] = static_cast<double>(x + e.org[0]) * L_.spacing;
+        B.y[c] = static_cast<double>(y + e.org[1]) * L_.spacing;
+        B.z[c] = static_cast<double>(z + e.org[2]) * L_.spacing;
       }
   std::vector<std::int32_t> who(nbox, -1);
   B.cell.resize(n);
@@ -123,16 +149,15 @@ void PdSystem::build_box() {
     who[static_cast<std::size_t>(B.cell[i])] = static_cast<std::int32_t>(i);
     B.b[static_cast<std::size_t>(B.cell[i])] = b_[i];
   }
-  const auto csr_entry = [&](std::int32_t i, std::int32_t j) {  // rows are sorted by neighbour
-    const auto* b = L_.neighbours.data() + L_.offsets[i];
-    const auto* e = L_.neighbours.data() + L_.offsets[i + 1];
-    const auto* it = std::lower_bound(b, e, j);
-    return it != e && *it == j ? static_cast<std::int32_t>(it - L_.neighbours.data()) : -1;
-  };
+  return who;
+}
 
+void PdSystem::build_box_blocks(const BoxExtent& e, int H, const HalfOffsets& half, const std::vector<std::int32_t>& who) {
   // Blocks: runs of 4 cells along x from the start of each row segment (points are sorted
   // z, y, x). Slabs of T >= H cells in z, so a slab's additions reach only itself and the next.
+  const std::size_t n = size();
   const int T = std::max(H, 1);
+  Box& B = box_;
   B.block_cell.clear();
   B.block_group.assign(1, 0);
   B.delta.clear();
@@ -146,39 +171,47 @@ void PdSystem::build_box() {
     while (j + 1 < n && L_.cell[j + 1][1] == L_.cell[i][1] && L_.cell[j + 1][2] == L_.cell[i][2] &&
            L_.cell[j + 1][0] == L_.cell[j][0] + 1)
       ++j;
-    const int s = (L_.cell[i][2] - lo[2]) / T;
+    const int s = (L_.cell[i][2] - e.lo[2]) / T;
     while (slab < s) B.slab_blocks.push_back(static_cast<std::int32_t>(B.block_cell.size())), ++slab;
     for (std::size_t p0 = i; p0 <= j; p0 += 4) {
-      const std::int64_t c = B.cell[p0];
       const int lanes = static_cast<int>(std::min<std::size_t>(4, j - p0 + 1));
-      for (const auto& [d, len] : half) {
-        const std::int64_t dc = (static_cast<std::int64_t>(d[2]) * ny + d[1]) * nx + d[0];
-        double al[4] = {0, 0, 0, 0};
-        std::int32_t qq[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
-        bool any = false;
-        for (int l = 0; l < lanes; ++l) {
-          const auto pi = static_cast<std::int32_t>(p0 + l);
-          const std::int32_t pj = who[static_cast<std::size_t>(c + l + dc)];
-          if (pj < 0) continue;
-          const std::int32_t qij = csr_entry(pi, pj), qji = csr_entry(pj, pi);
-          if (qij < 0 || qji < 0) continue;
-          al[l] = alive_[qij];
-          qq[2 * l] = qij;
-          qq[2 * l + 1] = qji;
-          any = true;
-        }
-        if (!any) continue;
-        B.delta.push_back(dc);
-        B.len.push_back(len);
-        B.alive.insert(B.alive.end(), al, al + 4);
-        B.csr.insert(B.csr.end(), qq, qq + 8);
-      }
-      B.block_cell.push_back(c);
+      for (const auto& [d, len] : half) add_bond_group(e, d, len, p0, lanes, who);
+      B.block_cell.push_back(B.cell[p0]);
       B.block_group.push_back(static_cast<std::int32_t>(B.delta.size()));
     }
     i = j + 1;
   }
   B.slab_blocks.push_back(static_cast<std::int32_t>(B.block_cell.size()));
+}
+
+void PdSystem::add_bond_group(const BoxExtent& e, const std::array<int, 3>& d, double len, std::size_t p0, int lanes,
+                              const std::vector<std::int32_t>& who) {
+  Box& B = box_;
+  const std::int64_t c = B.cell[p0];
+  const std::int64_t dc = (static_cast<std::int64_t>(d[2]) * e.ny + d[1]) * e.nx + d[0];
+  double al[4] = {0, 0, 0, 0};
+  std::int32_t qq[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+  bool any = false;
+  for (int l = 0; l < lanes; ++l) {
+    const auto pi = static_cast<std::int32_t>(p0 + l);
+    const std::int32_t pj = who[static_cast<std::size_t>(c + l + dc)];
+    if (pj < 0) continue;
+    const std::int32_t qij = csr_entry(L_, pi, pj), qji = csr_entry(L_, pj, pi);
+    if (qij < 0 || qji < 0) continue;
+    al[l] = alive_[qij];
+    qq[2 * l] = qij;
+    qq[2 * l + 1] = qji;
+    any = true;
+  }
+  if (!any) return;
+  B.delta.push_back(dc);
+  B.len.push_back(len);
+  B.alive.insert(B.alive.end(), al, al + 4);
+  B.csr.insert(B.csr.end(), qq, qq + 8);
+}
+
+void PdSystem::order_box_slabs() {
+  Box& B = box_;
   const auto slab_groups = [&B](std::int32_t s) {
     return B.block_group[static_cast<std::size_t>(B.slab_blocks[static_cast<std::size_t>(s) + 1])] -
            B.block_group[static_cast<std::size_t>(B.slab_blocks[static_cast<std::size_t>(s)])];
@@ -191,13 +224,13 @@ void PdSystem::build_box() {
     std::stable_sort(order.begin(), order.end(),
                      [&](std::int32_t a, std::int32_t b) { return slab_groups(a) > slab_groups(b); });
   }
-  if (B.delta.size() > static_cast<std::size_t>(INT32_MAX / 8))
-    throw std::invalid_argument("peridynamics: too many bonds for the box layout");
-  B.cur.assign(B.alive.size(), 0.0);
+}
 
+void PdSystem::count_box_lanes() {
   // The broken-bond counts read the box's lanes, so a check needs no sync_alive(): per lane its
   // number of CSR entries, per directed face bond its lane, and the entries outside the box
   // (they never change) counted once here.
+  Box& B = box_;
   std::vector<std::int32_t> lane_of(alive_.size(), -1);
   B.lane_entries.assign(B.alive.size(), 0);
   for (std::size_t k = 0; k < B.alive.size(); ++k)
@@ -210,7 +243,7 @@ void PdSystem::build_box() {
   for (std::size_t q = 0; q < alive_.size(); ++q) B.broken_outside += lane_of[q] < 0 && alive_[q] == 0.0;
   B.face_lane.clear();
   B.face_broken_outside = 0;
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < size(); ++i)
     for (auto q : L_.face_bond[i]) {
       if (q < 0) continue;
       if (const std::int32_t l = lane_of[static_cast<std::size_t>(q)]; l >= 0)
@@ -218,6 +251,19 @@ void PdSystem::build_box() {
       else
         B.face_broken_outside += alive_[static_cast<std::size_t>(q)] == 0.0;
     }
+}
+
+void PdSystem::build_box() {
+  int H = 0;
+  const HalfOffsets half = half_bond_offsets(L_, H);
+  const BoxExtent e = box_extent(H);
+  const std::vector<std::int32_t> who = fill_box_cells(e);
+  build_box_blocks(e, H, half, who);
+  order_box_slabs();
+  if (box_.delta.size() > static_cast<std::size_t>(INT32_MAX / 8))
+    throw std::invalid_argument("peridynamics: too many bonds for the box layout");
+  box_.cur.assign(box_.alive.size(), 0.0);
+  count_box_lanes();
 }
 
 void PdSystem::sync_alive() const {

@@ -11,7 +11,9 @@
 // slabs run first, then the odd ones, whatever the thread count, so every cell receives its
 // additions in the same order and results are bitwise independent of the thread count.
 #pragma once
+#include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "breakage/peridynamics/PdLattice.h"
@@ -119,7 +121,24 @@ class PdSystem {
     double dt, c1, c2, inv_rho;
   };
   void forces_and_update(int threads, const Update* up);
+  // The box layout (box_ below) from the lattice, in steps: the box's extent (its lowest
+  // lattice cell lo, origin cell org and nx × ny × nz cells, padded by the bond reach H);
+  // the cells' reference positions and the point in each cell (-1: none); the blocks with
+  // their bond groups (one group per half-stencil offset d of length len with a bond in one
+  // of the block's `lanes` points from p0) and slabs; the slabs' order; the lane counts.
+  struct BoxExtent {
+    std::array<int, 3> lo, org;
+    std::int64_t nx = 0, ny = 0, nz = 0;
+  };
   void build_box();
+  BoxExtent box_extent(int H) const;
+  std::vector<std::int32_t> fill_box_cells(const BoxExtent& e);
+  void build_box_blocks(const BoxExtent& e, int H, const std::vector<std::pair<std::array<int, 3>, double>>& half,
+                        const std::vector<std::int32_t>& who);
+  void add_bond_group(const BoxExtent& e, const std::array<int, 3>& d, double len, std::size_t p0, int lanes,
+                      const std::vector<std::int32_t>& who);
+  void order_box_slabs();
+  void count_box_lanes();
   void sync_alive() const;
 
   const Lattice& L_;

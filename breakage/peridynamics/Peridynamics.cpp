@@ -370,6 +370,53 @@ double PeridynamicsModel::load_measure(const Grain&, const Material&, std::span<
   return f;
 }
 
+namespace {
+
+// Lattice frame: one lattice axis along the largest force (see PdOptions); the loads are
+// turned into it.
+Quat align_to_largest(std::vector<BodyLoad>& loads) {
+  const Quat frame = z_onto(normalized(loads[largest_load(loads)].force));
+  const Quat to_frame = frame.conjugate();
+  for (auto& l : loads) l = {to_frame.rotate(l.point), to_frame.rotate(l.force)};
+  return frame;
+}
+
+// The lattice point at the centre of each load's contact zone (the nearest); false when a
+// load lies farther than contact_tolerance_factor × spacing from every point.
+bool zone_centres(const Lattice& L, const std::vector<BodyLoad>& loads, const PdOptions& o,
+                  std::vector<std::int32_t>& centre) {
+  centre.resize(loads.size());
+  for (std::size_t k = 0; k < loads.size(); ++k) {
+    double dist = 0;
+    centre[k] = nearest_point(L, loads[k].point, &dist);
+    if (dist > o.contact_tolerance_factor * L.spacing) return false;
+  }
+  return true;
+}
+
+// Contact zones; the zone of the largest force is fixed, the others carry their force.
+void load_zones(PdSystem& sys, const Lattice& L, const std::vector<BodyLoad>& loads,
+                const std::vector<std::int32_t>& centre, const PdOptions& o) {
+  const std::size_t largest = largest_load(loads);
+  const double zr = o.zone_radius_factor * L.spacing * (1.0 + 1e-9);
+  sys.fix(zone(L, centre[largest], zr));
+  for (std::size_t k = 0; k < loads.size(); ++k)
+    if (k != largest) sys.add_load(zone(L, centre[k], zr), loads[k].force);
+}
+
+// The pieces of a split lattice (in the lattice frame `frame`).
+PointClusters split_pieces(const Lattice& L, const PdSystem& sys, const RunResult& r, const Quat& frame,
+                           double min_child_fraction) {
+  PointClusters pc = pd::point_clusters(L, sys.alive(), min_child_fraction);
+  // A piece above the child size at the split may crumble into fines (< 3 %) during the
+  // post-split transits; the split itself then decides the pieces.
+  if (pc.clusters < 2 && !r.alive_at_split.empty()) pc = pd::point_clusters(L, r.alive_at_split, min_child_fraction);
+  pc.frame = frame;  // lattice frame → body frame
+  return pc;
+}
+
+}  // namespace
+
 BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
                                             std::span<const Contact> contacts) const {
   const auto t0 = Clock::now();
@@ -397,57 +444,21 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
           "grain " + std::to_string(g.id) + " has no critical energy release rate (assign_strength not called?)");
 
   // Contact forces into the body frame (Zhu & Zhao 2019 §3.1).
-  struct Local {
-    Vec3 point, force;
-  };
-  std::vector<Local> loads;
-  const Quat& q = g.orientation;
-  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-  require(std::isfinite(qn) && qn > 0 && is_finite(g.position),
-          "grain " + std::to_string(g.id) + " has a non-finite pose");
-  const Quat to_body = q.normalized().conjugate();  // body ← world
-  for (const auto& c : contacts) {
-    require(is_finite(c.point) && is_finite(c.force),
-            "non-finite contact point or force on grain " + std::to_string(g.id));
-    if (norm2(c.force) == 0) continue;
-    loads.push_back({to_body.rotate(c.point - g.position), to_body.rotate(c.force)});
-  }
+  std::vector<BodyLoad> loads = body_frame_loads(g, contacts, "peridynamics");
   for (const auto& l : loads) a.load = std::max(a.load, norm(l.force));
   if (loads.size() < 2) return finish("no_load");
-
-  // Lattice frame: one lattice axis along the largest force (see PdOptions).
-  Quat frame;
-  if (o_.align_lattice_to_load) {
-    std::size_t big = 0;
-    for (std::size_t k = 1; k < loads.size(); ++k)
-      if (norm2(loads[k].force) > norm2(loads[big].force)) big = k;
-    frame = z_onto(normalized(loads[big].force));
-    const Quat to_frame = frame.conjugate();
-    for (auto& l : loads) l = {to_frame.rotate(l.point), to_frame.rotate(l.force)};
-  }
+  const Quat frame = o_.align_lattice_to_load ? align_to_largest(loads) : Quat{};
 
   const double d_e = g.shape->equivalent_diameter();
   const Lattice L = grain_lattice(*g.shape, o_, d_e, frame);
   points = static_cast<long>(L.size());
   bonds = L.bonds();
   if (static_cast<long>(L.size()) < o_.min_points) return finish("too_few_points");
-
-  // Contact zones; the zone of the largest force is fixed, the others carry their force.
-  std::size_t largest = 0;
-  for (std::size_t k = 1; k < loads.size(); ++k)
-    if (norm2(loads[k].force) > norm2(loads[largest].force)) largest = k;
-  const double zr = o_.zone_radius_factor * L.spacing * (1.0 + 1e-9);
-  std::vector<std::int32_t> centre(loads.size());
-  for (std::size_t k = 0; k < loads.size(); ++k) {
-    double dist = 0;
-    centre[k] = nearest_point(L, loads[k].point, &dist);
-    if (dist > o_.contact_tolerance_factor * L.spacing) return finish("contact_off_grain");
-  }
+  std::vector<std::int32_t> centre;
+  if (!zone_centres(L, loads, o_, centre)) return finish("contact_off_grain");
   const auto mat = analysis_material(m, o_);
   PdSystem sys(L, mat, grain_critical_stretch(gc, mat, L.horizon, d_e, o_));
-  sys.fix(zone(L, centre[largest], zr));
-  for (std::size_t k = 0; k < loads.size(); ++k)
-    if (k != largest) sys.add_load(zone(L, centre[k], zr), loads[k].force);
+  load_zones(sys, L, loads, centre, o_);
 
   // Linear ramp: the largest force grows at the size-dependent rate (§5).
   const double fmax = a.load;
@@ -458,19 +469,13 @@ BreakageAnalysis PeridynamicsModel::analyse(const Grain& g, const Material& m,
   if (std::isfinite(r.lambda_first)) first_break_force = r.lambda_first * fmax;
   hold_steps = static_cast<double>(r.hold_steps);
   quiet_max = r.quiet_transits_max;
-  if (r.split) {
-    PointClusters pc = pd::point_clusters(L, sys.alive(), o_.min_child_fraction);
-    // A piece above the child size at the split may crumble into fines (< 3 %) during the
-    // post-split transits; the split itself then decides the pieces.
-    if (pc.clusters < 2 && !r.alive_at_split.empty())
-      pc = pd::point_clusters(L, r.alive_at_split, o_.min_child_fraction);
-    pc.frame = frame;  // lattice frame → body frame
-    force_at_split = r.lambda * fmax;
-    if (pc.clusters < 2) return finish("split_into_fines");
-    a.points = damage_cloud(L, sys, pc, frame);
-    a.broken = true;
-    a.fracture = std::move(pc);
-  }
+  if (!r.split) return finish(r.outcome);
+  PointClusters pc = split_pieces(L, sys, r, frame, o_.min_child_fraction);
+  force_at_split = r.lambda * fmax;
+  if (pc.clusters < 2) return finish("split_into_fines");
+  a.points = damage_cloud(L, sys, pc, frame);
+  a.broken = true;
+  a.fracture = std::move(pc);
   return finish(r.outcome);
 }
 

@@ -150,6 +150,176 @@ bool degenerate_facet(const Point& a, const Point& b, const Point& c) {
   return norm(cross(q - p, r - p)) < kFlatFacet * l2;
 }
 
+// The alpha shape's cells: handle, alpha value (squared circumradius; +inf for infinite
+// cells), neighbours, and whether the cell is infinite or (nearly) flat.
+struct CellTable {
+  std::vector<AlphaShape3::Cell_handle> cells;
+  std::vector<double> alpha;
+  std::vector<std::array<int, 4>> nb;
+  std::vector<char> infinite, flat;
+  int size() const { return static_cast<int>(cells.size()); }
+};
+
+CellTable cell_table(AlphaShape3& as) {
+  CellTable t;
+  for (auto c = as.all_cells_begin(); c != as.all_cells_end(); ++c) {
+    c->info() = t.size();
+    t.cells.push_back(c);
+  }
+  const int nc = t.size();
+  t.alpha.assign(nc, std::numeric_limits<double>::infinity());
+  t.nb.resize(nc);
+  t.infinite.assign(nc, 0);
+  t.flat.assign(nc, 0);
+  for (int i = 0; i < nc; ++i) {
+    for (int j = 0; j < 4; ++j) t.nb[i][j] = t.cells[i]->neighbor(j)->info();
+    t.infinite[i] = as.is_infinite(t.cells[i]);
+    if (t.infinite[i]) continue;
+    t.alpha[i] = CGAL::to_double(t.cells[i]->get_alpha());
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = cgal::to_vec(t.cells[i]->vertex(k)->point());
+    double l2 = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) l2 = std::max(l2, norm2(p[a] - p[b]));
+    t.flat[i] = std::abs(dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0]))) < kFlatCell * l2 * std::sqrt(l2);
+  }
+  return t;
+}
+
+// Nearly flat cells (only with non-lattice input; exact lattice coordinates have none):
+// a sliver of ~zero volume and huge circumradius stays EXTERIOR until alpha is huge
+// and dents the surface. Having no volume of its own, it joins the solid once three
+// of its four neighbours have (so it is never a fin sticking out of the solid).
+void lower_flat_cells(CellTable& t) {
+  constexpr int kth = 3;
+  for (int pass = 0; pass < 100; ++pass) {
+    bool changed = false;
+    for (int i = 0; i < t.size(); ++i) {
+      if (!t.flat[i]) continue;
+      double a[4];
+      for (int j = 0; j < 4; ++j) a[j] = t.alpha[t.nb[i][j]];
+      std::sort(a, a + 4);
+      if (a[kth - 1] < t.alpha[i]) {
+        t.alpha[i] = a[kth - 1];
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+// In REGULARIZED mode a cell is INTERIOR exactly when alpha >= its own alpha value, and
+// the REGULAR facets are those between INTERIOR and EXTERIOR cells: the shape changes
+// only at the cells' values of the alpha spectrum, so those are the candidates. The
+// first candidate is the starting alpha a0 itself (if every cell is smaller, the shape
+// there is already the whole triangulation, i.e. the convex hull).
+std::vector<double> alpha_candidates(const CellTable& t, double a0) {
+  std::vector<double> candidates{a0};
+  for (double a : t.alpha)
+    if (std::isfinite(a) && a > a0) candidates.push_back(a);
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  return candidates;
+}
+
+// EXTERIOR cells connected to infinity through EXTERIOR cells are outside; enclosed
+// EXTERIOR cells (voids) are filled — a fragment has no internal cavity. (With the
+// boundary points only, the inside of a piece is tiled by large cells that stay
+// EXTERIOR up to alpha ~ inradius².)
+void mark_outside(const CellTable& t, double alpha, std::vector<char>& outside, std::vector<int>& queue) {
+  std::fill(outside.begin(), outside.end(), 0);
+  queue.clear();
+  for (int i = 0; i < t.size(); ++i)
+    if (t.infinite[i]) {
+      outside[i] = 1;
+      queue.push_back(i);
+    }
+  while (!queue.empty()) {
+    const int i = queue.back();
+    queue.pop_back();
+    for (int j = 0; j < 4; ++j) {
+      const int k = t.nb[i][j];
+      if (!outside[k] && t.alpha[k] > alpha) {
+        outside[k] = 1;
+        queue.push_back(k);
+      }
+    }
+  }
+}
+
+// REGULAR facets (solid | outside), each oriented so its normal points outside, as
+// triangles of input point indices. False at the first (nearly) zero-area facet: such
+// facets pass CGAL's self-intersection test but fold as soon as the coordinates are rounded.
+bool regular_facets(const CellTable& t, const std::vector<char>& outside, std::vector<std::array<int, 3>>& tris) {
+  tris.clear();
+  for (int i = 0; i < t.size(); ++i) {
+    if (outside[i]) continue;
+    const auto c = t.cells[i];
+    for (int j = 0; j < 4; ++j) {
+      if (!outside[t.nb[i][j]]) continue;
+      auto v0 = c->vertex((j + 1) & 3), v1 = c->vertex((j + 2) & 3), v2 = c->vertex((j + 3) & 3);
+      if (CGAL::orientation(v0->point(), v1->point(), v2->point(), c->vertex(j)->point()) == CGAL::POSITIVE)
+        std::swap(v1, v2);
+      if (degenerate_facet(v0->point(), v1->point(), v2->point())) return false;
+      tris.push_back({v0->info(), v1->info(), v2->info()});
+    }
+  }
+  return true;
+}
+
+// The triangles as a polygon soup over the points they use (`original`: the input index of
+// each soup point).
+struct Soup {
+  std::vector<Point> pts;
+  std::vector<int> original;
+  std::vector<std::vector<std::size_t>> polys;
+};
+
+Soup make_soup(const std::vector<std::array<int, 3>>& tris, const std::vector<Point>& pts) {
+  Soup s;
+  std::vector<int> remap(pts.size(), -1);
+  s.polys.reserve(tris.size());
+  for (const auto& t : tris) {
+    std::vector<std::size_t> poly(3);
+    for (int k = 0; k < 3; ++k) {
+      if (remap[t[k]] < 0) {
+        remap[t[k]] = static_cast<int>(s.pts.size());
+        s.pts.push_back(pts[t[k]]);
+        s.original.push_back(t[k]);
+      }
+      poly[k] = static_cast<std::size_t>(remap[t[k]]);
+    }
+    s.polys.push_back(std::move(poly));
+  }
+  return s;
+}
+
+// The candidate surface `tris` as a closed, outward-oriented mesh of the caller's points;
+// empty when it passes, otherwise why it is not one.
+std::string candidate_mesh(const std::vector<std::array<int, 3>>& tris, const Working& w,
+                           const std::vector<Vec3>& points, TriMesh& mesh) {
+  std::string reason = screen_soup(tris, static_cast<int>(points.size()));
+  if (!reason.empty()) return reason;
+  // The recipe's manifoldness test: orient_polygon_soup returns false when it has to
+  // duplicate a non-manifold vertex (or edge).
+  Soup s = make_soup(tris, w.pts);
+  if (!PMP::orient_polygon_soup(s.pts, s.polys)) return "non-manifold vertex";
+  cgal::Mesh sm;
+  PMP::polygon_soup_to_polygon_mesh(s.pts, s.polys, sm);
+  if (!CGAL::is_closed(sm)) return "not closed";
+  if (PMP::does_self_intersect(sm)) return "self-intersecting";
+  for (int idx : s.original) mesh.vertices.push_back(points[idx]);
+  for (const auto& p : s.polys)
+    mesh.triangles.push_back({static_cast<int>(p[0]), static_cast<int>(p[1]), static_cast<int>(p[2])});
+  const double vol = polyhedron_mass_properties(mesh).volume;
+  if (vol < 0) {
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  } else if (!(vol > 0)) {
+    return "zero volume";
+  }
+  return {};
+}
+
 }  // namespace
 
 AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const AlphaShapeOptions& opt) {
@@ -174,63 +344,14 @@ AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const A
   }
   res.delaunay_vertices = static_cast<int>(dt.number_of_vertices());
   AlphaShape3 as(dt, 0, AlphaShape3::REGULARIZED);
-
-  // Cell table: alpha value (squared circumradius; +inf for infinite cells), neighbours.
-  std::vector<AlphaShape3::Cell_handle> cells;
-  for (auto c = as.all_cells_begin(); c != as.all_cells_end(); ++c) {
-    c->info() = static_cast<int>(cells.size());
-    cells.push_back(c);
-  }
-  const int nc = static_cast<int>(cells.size());
-  std::vector<double> cell_alpha(nc, std::numeric_limits<double>::infinity());
-  std::vector<std::array<int, 4>> nb(nc);
-  std::vector<char> flat(nc, 0);
-  for (int i = 0; i < nc; ++i) {
-    for (int j = 0; j < 4; ++j) nb[i][j] = cells[i]->neighbor(j)->info();
-    if (as.is_infinite(cells[i])) continue;
-    cell_alpha[i] = CGAL::to_double(cells[i]->get_alpha());
-    Vec3 p[4];
-    for (int k = 0; k < 4; ++k) p[k] = cgal::to_vec(cells[i]->vertex(k)->point());
-    double l2 = 0;
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) l2 = std::max(l2, norm2(p[a] - p[b]));
-    flat[i] = std::abs(dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0]))) < kFlatCell * l2 * std::sqrt(l2);
-  }
-  // Nearly flat cells (only with non-lattice input; exact lattice coordinates have none):
-  // a sliver of ~zero volume and huge circumradius stays EXTERIOR until alpha is huge
-  // and dents the surface. Having no volume of its own, it joins the solid once three
-  // of its four neighbours have (so it is never a fin sticking out of the solid).
-  constexpr int kth = 3;
-  for (int pass = 0; pass < 100; ++pass) {
-    bool changed = false;
-    for (int i = 0; i < nc; ++i) {
-      if (!flat[i]) continue;
-      double a[4];
-      for (int j = 0; j < 4; ++j) a[j] = cell_alpha[nb[i][j]];
-      std::sort(a, a + 4);
-      if (a[kth - 1] < cell_alpha[i]) {
-        cell_alpha[i] = a[kth - 1];
-        changed = true;
-      }
-    }
-    if (!changed) break;
-  }
-  // In REGULARIZED mode a cell is INTERIOR exactly when alpha >= its own alpha value, and
-  // the REGULAR facets are those between INTERIOR and EXTERIOR cells: the shape changes
-  // only at the cells' values of the alpha spectrum, so those are the candidates. The
-  // first candidate is the starting alpha itself (if every cell is smaller, the shape
-  // there is already the whole triangulation, i.e. the convex hull).
+  CellTable cells = cell_table(as);
+  lower_flat_cells(cells);
   const double unit2 = w.unit * w.unit;
-  const double a0 = std::pow(opt.start_spacings * opt.spacing, 2) / unit2;
   const double a_max = std::pow(opt.max_spacings * opt.spacing, 2) / unit2;
-  std::vector<double> candidates{a0};
-  for (double a : cell_alpha)
-    if (std::isfinite(a) && a > a0) candidates.push_back(a);
-  std::sort(candidates.begin(), candidates.end());
-  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  const std::vector<double> candidates = alpha_candidates(cells, std::pow(opt.start_spacings * opt.spacing, 2) / unit2);
 
   std::vector<std::array<int, 3>> tris;
-  std::vector<char> outside(nc);
+  std::vector<char> outside(cells.size());
   std::vector<int> queue;
   double last = -1;
   std::string why = "no alpha value in [" + fmt_num(opt.start_spacings) + ", " +
@@ -244,98 +365,12 @@ AlphaShapeResult alpha_shape_polyhedron(const std::vector<Vec3>& points, const A
     }
     last = alpha;
     ++res.steps;
-    // EXTERIOR cells connected to infinity through EXTERIOR cells are outside; enclosed
-    // EXTERIOR cells (voids) are filled — a fragment has no internal cavity. (With the
-    // boundary points only, the inside of a piece is tiled by large cells that stay
-    // EXTERIOR up to alpha ~ inradius².)
-    std::fill(outside.begin(), outside.end(), 0);
-    queue.clear();
-    for (int i = 0; i < nc; ++i)
-      if (as.is_infinite(cells[i])) {
-        outside[i] = 1;
-        queue.push_back(i);
-      }
-    while (!queue.empty()) {
-      const int i = queue.back();
-      queue.pop_back();
-      for (int j = 0; j < 4; ++j) {
-        const int k = nb[i][j];
-        if (!outside[k] && cell_alpha[k] > alpha) {
-          outside[k] = 1;
-          queue.push_back(k);
-        }
-      }
-    }
-    // REGULAR facets (solid | outside), each oriented so its normal points outside.
-    tris.clear();
-    bool degenerate = false;
-    for (int i = 0; i < nc && !degenerate; ++i) {
-      if (outside[i]) continue;
-      const auto c = cells[i];
-      for (int j = 0; j < 4; ++j) {
-        if (!outside[nb[i][j]]) continue;
-        auto v0 = c->vertex((j + 1) & 3), v1 = c->vertex((j + 2) & 3), v2 = c->vertex((j + 3) & 3);
-        if (CGAL::orientation(v0->point(), v1->point(), v2->point(), c->vertex(j)->point()) == CGAL::POSITIVE)
-          std::swap(v1, v2);
-        // (Nearly) zero-area facets pass CGAL's self-intersection test but fold as soon
-        // as the coordinates are rounded.
-        if (degenerate_facet(v0->point(), v1->point(), v2->point())) {
-          degenerate = true;
-          break;
-        }
-        tris.push_back({v0->info(), v1->info(), v2->info()});
-      }
-    }
-    if (degenerate) {
-      why = "last candidate: zero-area facet";
-      continue;
-    }
-    std::string reason = screen_soup(tris, n);
+    mark_outside(cells, alpha, outside, queue);
+    TriMesh mesh;
+    const std::string reason = regular_facets(cells, outside, tris) ? candidate_mesh(tris, w, points, mesh)
+                                                                      : "zero-area facet";
     if (!reason.empty()) {
       why = "last candidate: " + reason;
-      continue;
-    }
-    // The recipe's manifoldness test: orient_polygon_soup returns false when it has to
-    // duplicate a non-manifold vertex (or edge).
-    std::vector<Point> soup_pts;
-    std::vector<int> remap(n, -1), original;
-    std::vector<std::vector<std::size_t>> polys;
-    polys.reserve(tris.size());
-    for (const auto& t : tris) {
-      std::vector<std::size_t> poly(3);
-      for (int k = 0; k < 3; ++k) {
-        if (remap[t[k]] < 0) {
-          remap[t[k]] = static_cast<int>(soup_pts.size());
-          soup_pts.push_back(w.pts[t[k]]);
-          original.push_back(t[k]);
-        }
-        poly[k] = static_cast<std::size_t>(remap[t[k]]);
-      }
-      polys.push_back(std::move(poly));
-    }
-    if (!PMP::orient_polygon_soup(soup_pts, polys)) {
-      why = "last candidate: non-manifold vertex";
-      continue;
-    }
-    cgal::Mesh sm;
-    PMP::polygon_soup_to_polygon_mesh(soup_pts, polys, sm);
-    if (!CGAL::is_closed(sm)) {
-      why = "last candidate: not closed";
-      continue;
-    }
-    if (PMP::does_self_intersect(sm)) {
-      why = "last candidate: self-intersecting";
-      continue;
-    }
-    TriMesh mesh;
-    for (int idx : original) mesh.vertices.push_back(points[idx]);
-    for (const auto& p : polys)
-      mesh.triangles.push_back({static_cast<int>(p[0]), static_cast<int>(p[1]), static_cast<int>(p[2])});
-    const double vol = polyhedron_mass_properties(mesh).volume;
-    if (vol < 0) {
-      for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
-    } else if (!(vol > 0)) {
-      why = "last candidate: zero volume";
       continue;
     }
     res.ok = true;

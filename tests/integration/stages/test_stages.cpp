@@ -13,6 +13,7 @@
 
 #include "output/Writers.h"
 #include "run/RunPipeline.h"
+#include "output/Writers.h"
 #include "tools/Stages.h"
 #include "tests/support/CliRunner.h"
 

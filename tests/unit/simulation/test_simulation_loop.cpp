@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <thread>
 
 #include "core/Simulation.h"
@@ -294,18 +295,23 @@ struct Lineage {
   long events = 0;
 };
 
+// `count` 1 mm spheres on the x axis, `spacing` apart.
+void add_spheres(Simulation& sim, int count, double spacing) {
+  for (int i = 0; i < count; ++i) {
+    Grain g;
+    g.shape = Shape::sphere(1e-3);
+    g.position = {spacing * i, 0, 0};
+    sim.add_grain(g);
+  }
+}
+
 Lineage run_lineage(std::unique_ptr<FragmentBuilder> builder, double child_factor) {
   EngineContext ctx;
   const SqueezeSetup u = squeeze_setup();
   Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(0, child_factor),
                  std::move(builder), ctx, u.ss, u.ls, u.sch, u.scr, 7);
   sim.set_container({0.01, 0.01, 0.01, 0});
-  for (int i = 0; i < 4; ++i) {
-    Grain g;
-    g.shape = Shape::sphere(1e-3);
-    g.position = {2e-3 * i, 0, 0};
-    sim.add_grain(g);
-  }
+  add_spheres(sim, 4, 2e-3);
   Lineage r;
   struct Rec : Observer {
     Lineage* r;
@@ -497,4 +503,46 @@ TEST(SimulationLoop, TinyGrainOutsideTheContainerLeavesAsFines) {
   EXPECT_NEAR(s.mass_removed, m_tiny, 1e-9 * m_tiny);
   EXPECT_NEAR(s.mass_final + s.mass_removed, s.mass_initial, 1e-9 * s.mass_initial);
   EXPECT_THROW(run(0.5e-3), PhysicsGuardError);  // d = 1 mm: not tiny, the run stops
+}
+
+// An analysis or a fragment build that throws (a degenerate geometry) is not fatal: the
+// grain stays as it was, summary.json counts the failure by the error's leading word, and
+// the mass budget holds.
+TEST(SimulationLoop, AFailedAnalysisLeavesTheGrainIntactAndIsCounted) {
+  class FailsOnGrain2 : public ThresholdModel {
+   public:
+    BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> cs) const override {
+      if (g.id == 2) throw std::invalid_argument("degenerate shape: no lattice");
+      return ThresholdModel::analyse(g, m, cs);
+    }
+  };
+  class FailsThreeTimes : public EighthBuilder {
+   public:
+    FragmentResult build(const Shape& parent, const Fracture& f) const override {
+      if (builds_++ < 3) throw std::runtime_error("convex_hull: internal error (test)");
+      return EighthBuilder::build(parent, f);
+    }
+    mutable int builds_ = 0;
+  };
+  EngineContext ctx;
+  SqueezeSetup u = squeeze_setup();
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<FailsOnGrain2>(),
+                 std::make_unique<FailsThreeTimes>(), ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  sim.set_container({0.01, 0.01, 0.01, 0});
+  add_spheres(sim, 8, 1e-3);
+  struct Rec : Observer {
+    long failed = 0;
+    void on_analysis(const Simulation&, const AnalysisRecord& a) override { failed += a.analysis.outcome == "failed"; }
+  };
+  auto rec = std::make_shared<Rec>();
+  sim.add_observer(rec);
+  const RunSummary sum = sim.run();
+  EXPECT_EQ(sum.breakage_events, 7);  // every grain but grain 2, three of them at a later check
+  EXPECT_EQ(sum.extra.at("analyses_failed_convex_hull"), 3);
+  const double on_grain_2 = sum.extra.at("analyses_failed_degenerate_shape");
+  EXPECT_GE(on_grain_2, 1);
+  EXPECT_EQ(sum.extra.at("analyses_failed"), 3 + on_grain_2);
+  EXPECT_EQ(rec->failed, 3 + on_grain_2);
+  EXPECT_EQ(sum.grains_final, 8u + 7u);
+  EXPECT_NEAR(sum.mass_final + sum.mass_removed, sum.mass_initial, 1e-12 * sum.mass_initial);
 }
