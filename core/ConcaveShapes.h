@@ -36,21 +36,6 @@ OptionTable concave_shape_options(const std::string& how, ConcaveShapeOptions S:
   };
 }
 
-// The same lines bound to a ConcaveShapeOptions of its own (read by `read_concave_shape_options`).
-struct ConcaveShapeSettings {
-  ConcaveShapeOptions concave;
-};
-inline OptionTable concave_shape_options(const std::string& how) {
-  return concave_shape_options(how, &ConcaveShapeSettings::concave);
-}
-
-// Reads the three options from the engine's section (the keys of the table above).
-inline ConcaveShapeOptions read_concave_shape_options(const Options& r) {
-  ConcaveShapeSettings s;
-  read_options(r.config(), concave_shape_options(""), s);
-  return s.concave;
-}
-
 // The convex pieces (their hulls, shape frame) a polyhedral `shape` collides as: none when
 // convex_pieces is off, the shape is not a polyhedron, or its hull is within
 // concavity_tolerance of its volume (it collides as its hull). A shape that cannot be cut

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -14,10 +15,7 @@ namespace {
 ShapeResolution resolution_from(const Config& c) {
   ShapeResolution r;
   if (!c.is_object("resolution") && !c.has("resolution")) return r;
-  Config rc = c.child("resolution");
-  r.mesh_subdivisions = static_cast<int>(rc.integer("mesh_subdivisions", r.mesh_subdivisions, 0, 6));
-  r.level_set_spacing = rc.number("level_set_spacing", 0.0, 0.0);
-  r.surface_nodes = static_cast<int>(rc.integer("surface_nodes", 0, 0, 10000000));
+  read_options(c.child("resolution"), shape_resolution_options(), r);
   return r;
 }
 
@@ -199,22 +197,17 @@ std::vector<Vec3> random_outline(const RandomOutlineSpec& spec) {
 
 namespace {
 
+// A template's radius defaults (its table's); a grain's must be given.
 RandomOutlineSpec random_outline_spec(const Config& c, bool unit) {
-  RandomOutlineSpec s;
-  s.vertices = static_cast<int>(c.integer("vertices", s.vertices, 3, 100000));
-  s.irregularity = c.number("irregularity", s.irregularity, 0.0, 0.9);
-  s.modes = static_cast<int>(c.integer("modes", s.modes, 2, 1000));
-  s.decay = c.number("decay", s.decay, 0.0, 10.0);
-  s.seed = c.unsigned_integer("seed", s.seed);
-  s.radius = unit ? c.positive("radius", 0.5) : c.positive("radius");
-  return s;
+  if (!unit) c.positive("radius");
+  return read_options<RandomOutlineSpec>(c, random_polygon_options());
 }
 
 }  // namespace
 
 std::vector<nlohmann::json> shape_pool(const Config& c) {
   c.choice("type", "pool", {"pool"});
-  const long count = c.integer("count", 25, 1, 100000);
+  const long count = read_options<PoolSettings>(c, pool_options()).count;
   const RandomOutlineSpec s = random_outline_spec(c, /*unit=*/true);
   std::vector<nlohmann::json> out;
   for (long i = 0; i < count; ++i)
@@ -243,7 +236,7 @@ Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
       if (!(v[i] > 0)) c.fail(key + "/" + std::to_string(i), "expected a length > 0");
     return v;
   };
-  const double scale = c.positive("scale", 1.0);
+  const double scale = read_options<ShapeSettings>(c, shape_options()).scale;
   Shape::Ptr base = guarded(c, [&]() -> Shape::Ptr {
     if (type == "level_set") return level_set_from_config(c, dim, res);
     if (type == "sphere") return Shape::sphere(length("radius", 0.5), res);
@@ -253,8 +246,8 @@ Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
     }
     if (type == "superellipsoid") {
       auto r = lengths("radii", {0.5, 0.5, 0.5}, 3);
-      return Shape::superellipsoid({r[0], r[1], r[2]}, c.number("eps1", 1.0, 1e-3, 2.0),
-                                   c.number("eps2", 1.0, 1e-3, 2.0), res);
+      const auto e = read_options<SuperellipsoidSettings>(c, superellipsoid_options());
+      return Shape::superellipsoid({r[0], r[1], r[2]}, e.eps1, e.eps2, res);
     }
     if (type == "box") {
       auto h = lengths("half_extents", {0.4, 0.4, 0.4}, 3);
@@ -284,12 +277,65 @@ Shape::Ptr shape_from_config(const Config& c, int dim, bool unit) {
     }
     if (type == "superellipse") {
       auto r = lengths("radii", {0.5, 0.5}, 2);
-      return Shape::superellipse(r[0], r[1], c.number("eps", 1.0, 1e-3, 2.0), res);
+      return Shape::superellipse(r[0], r[1], read_options<SuperellipseSettings>(c, superellipse_options()).eps, res);
     }
     if (type == "random_polygon") return Shape::polygon(random_outline(random_outline_spec(c, unit)), res);
     return Shape::polygon(point_list(c, "vertices", 2), res);
   });
   return scale == 1.0 ? base : guarded(c, [&] { return base->scaled(scale); });
+}
+
+// ------------------------------------------------------------------ option tables
+
+const OptionTable& shape_options() {
+  static const OptionTable t{opt::positive("scale", &ShapeSettings::scale, "", "uniform factor on the shape's size")};
+  return t;
+}
+
+const OptionTable& shape_resolution_options() {
+  using S = ShapeResolution;
+  static const OptionTable t{
+      opt::integer("mesh_subdivisions", &S::mesh_subdivisions, 0, 6,
+                   "icosphere level of round shapes (1 → 42 vertices, as Zhu & Zhao 2019)"),
+      opt::number("level_set_spacing", &S::level_set_spacing, 0, std::numeric_limits<double>::infinity(), "m",
+                  "grid spacing of the shape's level set; 0 = its smallest extent / 20"),
+      opt::integer("surface_nodes", &S::surface_nodes, 0, 10000000, "surface points of its level set; 0 = automatic"),
+  };
+  return t;
+}
+
+const OptionTable& superellipsoid_options() {
+  using S = SuperellipsoidSettings;
+  static const OptionTable t{
+      opt::number("eps1", &S::eps1, 1e-3, 2, "", "ε1: squareness in the xy-plane (1 = ellipse, → 0 = box)"),
+      opt::number("eps2", &S::eps2, 1e-3, 2, "", "ε2: squareness along z"),
+  };
+  return t;
+}
+
+const OptionTable& superellipse_options() {
+  static const OptionTable t{
+      opt::number("eps", &SuperellipseSettings::eps, 1e-3, 2, "", "squareness (1 = ellipse, → 0 = rectangle)")};
+  return t;
+}
+
+const OptionTable& random_polygon_options() {
+  using S = RandomOutlineSpec;
+  static const OptionTable t{
+      opt::integer("vertices", &S::vertices, 3, 100000, "outline vertices, equally spaced in angle"),
+      opt::number("irregularity", &S::irregularity, 0, 0.9, "", "radii stay within radius·(1 ± irregularity)"),
+      opt::integer("modes", &S::modes, 2, 1000, "highest Fourier mode k of the radius"),
+      opt::number("decay", &S::decay, 0, 10, "", "mode amplitudes fall as k^−decay"),
+      opt::unsigned_integer("seed", &S::seed, "draws the amplitudes and phases"),
+      opt::positive("radius", &S::radius, "m", "mean radius; a grain must give it, a packing template defaults"),
+  };
+  return t;
+}
+
+const OptionTable& pool_options() {
+  static const OptionTable t{
+      opt::integer("count", &PoolSettings::count, 1, 100000, "random_polygon outlines, seeds seed, seed + 1, …")};
+  return t;
 }
 
 }  // namespace crumble

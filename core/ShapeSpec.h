@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/Config.h"
+#include "core/Options.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/Shape.h"
 
@@ -44,6 +45,29 @@ std::vector<Vec3> random_outline(const RandomOutlineSpec& spec);
 // {"type": "pool", "count": 25, + the random_polygon keys but radius}: `count`
 // random_polygon SHAPE specs with seeds seed, seed + 1, … (a packing's templates).
 std::vector<nlohmann::json> shape_pool(const Config& c);
+
+// The keys of SHAPE objects, each table bound to the struct it fills (the size keys,
+// "vertices", "triangles", "file" and the level_set keys are read by hand: their form
+// depends on the type and dimension). Generated into docs/scenarios.md.
+struct ShapeSettings {
+  double scale = 1;  // every SHAPE: uniform factor
+};
+const OptionTable& shape_options();
+const OptionTable& shape_resolution_options();  // SHAPE.resolution, bound to ShapeResolution
+struct SuperellipsoidSettings {
+  double eps1 = 1, eps2 = 1;
+};
+const OptionTable& superellipsoid_options();
+struct SuperellipseSettings {
+  double eps = 1;
+};
+const OptionTable& superellipse_options();
+// Bound to RandomOutlineSpec; "radius" is required for a grain and defaults for a template.
+const OptionTable& random_polygon_options();
+struct PoolSettings {
+  long count = 25;
+};
+const OptionTable& pool_options();  // besides the random_polygon keys
 
 // Wavefront OBJ (v / f lines; polygons fan-triangulated). Errors name file and line.
 TriMesh read_obj(const std::string& path);

@@ -5,6 +5,7 @@
 #include "core/Guards.h"
 #include "core/Loading.h"
 #include "core/Schedule.h"
+#include "core/ShapeSpec.h"
 #include "core/Screening.h"
 #include "core/Simulation.h"
 
@@ -20,6 +21,27 @@ const DefaultImplementations& default_implementations(int dimension) {
   // only: 2D fragments are level sets.
   static const DefaultImplementations d3{"bullet", "none", "alpha_shape"}, d2{"bullet", "none", "level_set"};
   return dimension == 2 ? d2 : d3;
+}
+
+// The "type" of the three seams' sections: the defaults are default_implementations'.
+const OptionTable& implementation_options() {
+  static const OptionTable t = [] {
+    const DefaultImplementations &d3 = default_implementations(3), &d2 = default_implementations(2);
+    auto row = [](const std::string& section, const std::string& in3, const std::string& in2, const std::string& doc) {
+      OptionSpec spec = opt::string(section + ".type", in3, doc);
+      spec.def = std::monostate{};
+      spec.default_doc = "\"" + in3 + "\"" + (in2 == in3 ? "" : " (2D: \"" + in2 + "\")");
+      return spec;
+    };
+    return OptionTable{
+        row("engine", d3.engine, d2.engine,
+            "the engine (`crumble list`); its options sit beside \"type\"; bullet is 3D only, a 2D scenario names lsdem"),
+        row("breakage", d3.breakage, d2.breakage, "the breakage model and its options"),
+        row("fragments", d3.fragments, d2.fragments,
+            "the fragment builder and its options (read when breakage is not none)"),
+    };
+  }();
+  return t;
 }
 
 const OptionTable& scenario_options() {
@@ -345,6 +367,7 @@ const OptionTable& motion_options() {
 std::vector<SectionOptions> scenario_sections() {
   return {
       {"scenario", "the top level of a scenario", &scenario_options()},
+      {"implementations", "the type of the engine, breakage and fragments sections", &implementation_options()},
       {"materials", "one entry of \"materials\" (Zhu & Zhao 2019 Table 1)", &material_options()},
       {"container", "the rigid box", &container_options()},
       {"packing", "the packing (cloud, grains or file)", &packing_options()},
@@ -361,6 +384,12 @@ std::vector<SectionOptions> scenario_sections() {
       {"rocks", "scene.rocks of the jaw crusher", &rock_options()},
       {"walls", "one entry of \"walls\"", &wall_options()},
       {"motion", "walls[i].motion", &motion_options()},
+      {"shape", "every SHAPE", &shape_options()},
+      {"resolution", "SHAPE.resolution: how finely a shape is discretised", &shape_resolution_options()},
+      {"superellipsoid", "SHAPE of type superellipsoid, besides radii", &superellipsoid_options()},
+      {"superellipse", "SHAPE of type superellipse (2D), besides radii", &superellipse_options()},
+      {"random_polygon", "SHAPE of type random_polygon (2D)", &random_polygon_options()},
+      {"pool", "a packing template of type pool (2D), besides the random_polygon keys", &pool_options()},
   };
 }
 

@@ -19,6 +19,7 @@ struct DefaultImplementations {
   std::string engine, breakage, fragments;
 };
 const DefaultImplementations& default_implementations(int dimension);
+const OptionTable& implementation_options();  // engine.type, breakage.type, fragments.type
 
 // The top level ("name", "dimension", "seed", ...); "time_step" is read by hand (a number
 // or a list of rules) with the default of its row.

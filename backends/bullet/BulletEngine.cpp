@@ -687,42 +687,42 @@ struct BulletEngine::Impl final : RigidWorld {
 // ------------------------------------------------------------------ BulletEngine
 
 const OptionTable& bullet_options() {
-  const BulletEngine::Options d;
-  static const OptionTable t = with_concave_shape_options(
+  using S = BulletEngine::Options;
+  static const OptionTable t = with_concave_shape_options<S>(
       {
-          rigid_option::sphere_representation("icosphere mesh (42 vertices, as Zhu & Zhao 2019)", "btSphereShape"),
-          rigid_option::length_scale("2 mm → 512"),
-          opt::positive_below("margin_fraction", d.margin_fraction, 0.1, false, "",
+          rigid_option::sphere_representation<S>("icosphere mesh (42 vertices, as Zhu & Zhao 2019)", "btSphereShape"),
+          rigid_option::length_scale<S>("2 mm → 512"),
+          opt::positive_below("margin_fraction", &S::margin_fraction, 0.1, false, "",
                               "collision margin / d (hulls are inset by it)"),
-          rigid_option::solver_iterations(
+          rigid_option::solver_iterations<S>(
               "projected Gauss-Seidel iterations at most (the shipped oedometers use 1000: at 100 the packing creeps)"),
-          opt::number("solver_tolerance", d.solver_tolerance, 0, 1, "",
+          opt::number("solver_tolerance", &S::solver_tolerance, 0, 1, "",
                       "stop when impulses change by at most this fraction between iterations (0 = always run "
                       "solver_iterations, as Zhu & Zhao 2019 §2.2)"),
-          opt::number("solver_residual", d.solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
-          rigid_option::erp("penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
-          opt::number("deep_penetration", d.deep_penetration, 0, 1, "",
+          opt::number("solver_residual", &S::solver_residual, 0, 1, "", "Bullet's own absolute residual threshold (0 = off)"),
+          rigid_option::erp<S>("penetration correction β (Zhu & Zhao 2019, eq. 8), Bullet's m_erp2"),
+          opt::number("deep_penetration", &S::deep_penetration, 0, 1, "",
                       "contacts deeper than this × d (the first grain's) are pushed apart by Bullet's split impulse at "
                       "deep_erp, without adding velocity; 0 = off (eq. 8 everywhere, as Zhu & Zhao 2019)"),
-          opt::number("deep_erp", d.deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
-          rigid_option::mass_scale("Zhu & Zhao 2019 §5 use 70"),
+          opt::number("deep_erp", &S::deep_erp, 0, 1, "", "penetration correction of the contacts past deep_penetration"),
+          rigid_option::mass_scale<S>("Zhu & Zhao 2019 §5 use 70"),
       },
       "btCompoundShape");
   return t;
 }
 
+// Settings built in code pass the table's ranges too (read_options checks a scenario's).
+static const BulletEngine::Options& checked_options(const BulletEngine::Options& o) {
+  check_options(bullet_options(), o, "bullet");
+  return o;
+}
+
 BulletEngine::Options BulletEngine::read_options(const Config& cfg) {
-  return read_rigid_engine_options<Options>(cfg, "bullet", bullet_options(), [](const crumble::Options& r, Options& o) {
-    o.margin_fraction = r.number("margin_fraction");
-    o.solver_tolerance = r.number("solver_tolerance");
-    o.solver_residual = r.number("solver_residual");
-    o.deep_penetration = r.number("deep_penetration");
-    o.deep_erp = r.number("deep_erp");
-  });
+  return read_rigid_engine_options<Options>(cfg, "bullet", bullet_options());
 }
 
 BulletEngine::BulletEngine(const Options& opts, const EngineContext& ctx)
-    : RigidEngine(std::make_unique<Impl>(opts, ctx)), impl_(static_cast<Impl*>(&world())) {}
+    : RigidEngine(std::make_unique<Impl>(checked_options(opts), ctx)), impl_(static_cast<Impl*>(&world())) {}
 
 double BulletEngine::last_solver_change() const { return impl_->solver->max_change; }
 

@@ -792,37 +792,38 @@ struct OdeWorld final : RigidWorld {
 
 const OptionTable& ode_options() {
   const double inf = std::numeric_limits<double>::infinity();
-  const OdeEngine::Options d;
-  static const OptionTable t = with_concave_shape_options(
+  using S = OdeEngine::Options;
+  static const OptionTable t = with_concave_shape_options<S>(
       {
-          rigid_option::sphere_representation("icosphere hull (dConvex)", "dSphere"),
-          rigid_option::length_scale("ODE's and libccd's tolerances are absolute"),
-          rigid_option::solver_iterations("QuickStep SOR iterations per step"),
-          opt::positive_below("sor_w", d.sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
-          rigid_option::erp("contact error reduction (penetration corrected per step); ODE's default 0.2 launches "
+          rigid_option::sphere_representation<S>("icosphere hull (dConvex)", "dSphere"),
+          rigid_option::length_scale<S>("ODE's and libccd's tolerances are absolute"),
+          rigid_option::solver_iterations<S>("QuickStep SOR iterations per step"),
+          opt::positive_below("sor_w", &S::sor_w, 2, true, "", "QuickStep over-relaxation factor (ODE's own default 1.3)"),
+          rigid_option::erp<S>("contact error reduction (penetration corrected per step); ODE's default 0.2 launches "
                             "grains at Δt ≈ 5e-5 s"),
-          opt::number("cfm", d.cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
-          opt::number("max_correcting_velocity", d.max_correcting_velocity, 0, inf, "m/s",
+          opt::number("cfm", &S::cfm, 0, inf, "", "contact constraint force mixing (internal units), a small regularisation"),
+          opt::number("max_correcting_velocity", &S::max_correcting_velocity, 0, inf, "m/s",
                       "cap on the velocity that pushes overlapping grains apart; 0 = none"),
-          opt::integer("contacts_per_pair", d.contacts_per_pair, 1, 16,
+          opt::integer("contacts_per_pair", &S::contacts_per_pair, 1, 16,
                        "most contact points between two polyhedra: libccd gives one, flat-on-flat contacts get up to "
                        "this many from the clipped touching faces (1 = libccd's point only)"),
-          rigid_option::mass_scale("mass scaling"),
+          rigid_option::mass_scale<S>("mass scaling"),
       },
       "one dConvex geom each on the grain's body");
   return t;
 }
 
-OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
-  return read_rigid_engine_options<Options>(cfg, "ode", ode_options(), [](const crumble::Options& r, Options& o) {
-    o.contacts_per_pair = static_cast<int>(r.integer("contacts_per_pair"));
-    o.sor_w = r.number("sor_w");
-    o.cfm = r.number("cfm");
-    o.max_correcting_velocity = r.number("max_correcting_velocity");
-  });
+// Settings built in code pass the table's ranges too (read_options checks a scenario's).
+static const OdeEngine::Options& checked_options(const OdeEngine::Options& o) {
+  check_options(ode_options(), o, "ode");
+  return o;
 }
 
-OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : RigidEngine(std::make_unique<OdeWorld>(opts, ctx)) {}
+OdeEngine::Options OdeEngine::read_options(const Config& cfg) {
+  return read_rigid_engine_options<Options>(cfg, "ode", ode_options());
+}
+
+OdeEngine::OdeEngine(const Options& opts, const EngineContext& ctx) : RigidEngine(std::make_unique<OdeWorld>(checked_options(opts), ctx)) {}
 
 std::unique_ptr<Engine> make_ode_engine(const Config& cfg, const EngineContext& ctx) {
   return make_rigid_engine<OdeEngine>(cfg, ctx, "ode");
