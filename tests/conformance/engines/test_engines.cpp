@@ -29,6 +29,7 @@
 #include "core/Config.h"
 #include "core/Platen.h"
 #include "scenarios/Registry.h"
+#include "tests/support/EngineKit.h"
 #include "tests/support/Registered.h"
 
 using namespace crumble;
@@ -108,12 +109,7 @@ class EngineConformance : public ::testing::TestWithParam<Registered> {
   static double mass(const Shape::Ptr& s) { return kDensity * s->volume(); }  // 2D: per metre
 
   static Grain grain(GrainId id, Shape::Ptr s, Vec3 pos, Quat q = {}) {
-    Grain g;
-    g.id = id;
-    g.shape = std::move(s);
-    g.position = pos;
-    g.orientation = q;
-    return g;
+    return testing_support::grain(id, std::move(s), pos, q);
   }
 
   // The engine's step: kDt, or its stable bound when that is smaller (explicit engines).

@@ -8,8 +8,11 @@
 
 #include "backends/lsdem/LsdemEngine.h"
 #include "scenarios/Registry.h"
+#include "tests/support/EngineKit.h"
 
 using namespace crumble;
+
+using crumble::testing_support::grain;
 
 namespace {
 
@@ -33,15 +36,6 @@ Shape::Ptr sphere(double r, double h, int nodes) {
   res.level_set_spacing = h;
   res.surface_nodes = nodes;
   return Shape::sphere(r, res);
-}
-
-Grain grain(GrainId id, Shape::Ptr s, Vec3 x, Quat q = {}) {
-  Grain g;
-  g.id = id;
-  g.shape = std::move(s);
-  g.position = x;
-  g.orientation = q;
-  return g;
 }
 
 const Contact* find_pair(const std::vector<Contact>& cs) {

@@ -17,48 +17,18 @@
 #include "core/Config.h"
 #include "scenarios/Registry.h"
 #include "tests/support/CupDrop.h"
+#include "tests/support/EngineKit.h"
 #include "tests/support/RollingCouple.h"
 
 using namespace crumble;
 using nlohmann::json;
 
+using namespace crumble::testing_support;
+
 namespace {
 
-constexpr double kG = 9.81;
-constexpr double kDensity = 2650;
-constexpr double kDt = 5e-5;
-
-std::unique_ptr<OdeEngine> make_engine(json opts = json::object(), Vec3 gravity = {0, 0, -kG},
-                                       Material mat = Material{}) {
-  opts["type"] = "ode";
-  Config cfg(opts);
-  EngineContext ctx;
-  ctx.gravity = gravity;
-  ctx.materials = {mat};
-  auto e = make_ode_engine(cfg, ctx);
-  cfg.check_unknown();
-  return std::unique_ptr<OdeEngine>(static_cast<OdeEngine*>(e.release()));
-}
-
-Grain grain(GrainId id, Shape::Ptr s, Vec3 pos, Quat q = {}) {
-  Grain g;
-  g.id = id;
-  g.shape = std::move(s);
-  g.position = pos;
-  g.orientation = q;
-  return g;
-}
-
-double mass_of(const Shape::Ptr& s) { return kDensity * s->volume(); }
-
-void run(Engine& e, int steps, double dt = kDt) {
-  for (int i = 0; i < steps; ++i) e.step(dt);
-}
-
-Grain state_of(const Engine& e, const Grain& g0) {
-  Grain g = g0;
-  e.read_state(std::span<Grain>(&g, 1));
-  return g;
+std::unique_ptr<OdeEngine> make_engine(json opts = json::object(), Vec3 gravity = {0, 0, -kG}, Material mat = Material{}) {
+  return make_engine_as<OdeEngine>("ode", make_ode_engine, std::move(opts), gravity, mat);
 }
 
 }  // namespace
