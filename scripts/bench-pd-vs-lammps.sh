@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 steps=1000
 rounds=${1:-3}
 [[ "$rounds" =~ ^[1-9][0-9]*$ ]] || { echo "bench: ROUNDS must be a positive integer, not '$rounds'" >&2; exit 2; }
-input=${LAMMPS_INPUT:-../shared/bench/lammps/in.lps_kernel}
+input=${LAMMPS_INPUT:-scripts/bench/in.lps_kernel}
 command -v lmp >/dev/null || { echo "bench: LAMMPS not installed (apt-get install lammps)" >&2; exit 2; }
 [ -f "$input" ] || { echo "bench: LAMMPS input $input not found" >&2; exit 2; }
 [ -x build/crumble ] || { echo "bench: build/crumble not built (bash scripts/setup.sh --target crumble)" >&2; exit 2; }
