@@ -17,7 +17,7 @@ class RunCommand : public Subcommand {
     c->add_option("scenario", file_, "scenario JSON file")->required();
     c->add_option("--out", out_, "output directory")->required();
     c->add_option("--set", sets_, "override a scenario value: path=value (e.g. engine.type=lsdem)");
-    c->add_option("--seed", seed_, "random seed (overrides the scenario's)");
+    c->add_option("--seed", seed_, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", threads_,
                   "threads (overrides the scenario's); a warning when more than the idle CPUs "
                   "(docs/performance.md, \"Threads on a busy machine\")")

@@ -63,6 +63,26 @@ TEST(Cli, MalformedJson) {
 
 TEST(Cli, MissingFile) { expect_input_error("validate /nonexistent/x.json", "cannot open"); }
 
+// A folder given as the scenario is named as a folder (reading it once gave "malformed JSON …
+// unexpected end of input").
+TEST(Cli, FolderAsScenarioSaysItIsAFolder) {
+  const std::string dir = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios";
+  expect_input_error("validate " + dir, "is a folder, not a scenario file");
+  const Result r = run("run " + dir + " --out " + (fs::temp_directory_path() / "crumble_cli_test" / "folder").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output.find("malformed JSON"), std::string::npos) << r.output;
+}
+
+// --seed takes 0 … 2^64 - 1; a negative seed is refused (it once wrapped to 2^64 - 1 silently).
+TEST(Cli, NegativeSeedIsRefused) {
+  const std::string f = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "negative_seed";
+  fs::remove_all(out);
+  expect_input_error("run " + f + " --seed -1 --out " + out.string(), "-1: expected a whole number from 0 to");
+  EXPECT_FALSE(fs::exists(out));
+  expect_input_error("compare " + f + " --seed -5 --out " + out.string() + " --vary engine.type=lsdem", "-5: expected");
+}
+
 TEST(Cli, UnknownKeyNamesPath) {
   const std::string f = scenario_file("good.json", kGood);
   expect_input_error("validate " + f + " --set loading.strain_rte=2", "/loading/strain_rte");
