@@ -63,6 +63,13 @@ struct SimulationState {
   long small_grain_overlaps = 0;
   long small_grains_removed = 0;  // tiny grains that left the container, taken out as fines
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
+  // Open scenes (core/OpenScene.h): rocks fed so far (the next one is the feed's rock number
+  // rocks_fed), their mass, and the product collected so far. The moving walls' pose follows
+  // from `time` (their motion is prescribed).
+  long rocks_fed = 0;
+  double mass_fed = 0;
+  std::vector<ProductGrain> product;
+  double product_mass = 0;
 };
 
 // Where the settling of a packing (scenarios/Packing.h) stands after a step: what a
