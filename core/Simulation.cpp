@@ -155,6 +155,7 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
   energy_in_ = st.energy_in;
+  initial_elastic_counted_ = true;  // in the checkpoint's energy_in
   reference_diameter_ = st.reference_diameter;
   guard_max_.small_grain_overlaps = st.small_grain_overlaps;
   guard_max_.small_grains_removed = st.small_grains_removed;
@@ -183,6 +184,13 @@ double Simulation::time_step(double stress) const {
 }
 
 void Simulation::sync_grains() { engine_->read_state(grains_); }
+
+void Simulation::account_step(double platen_force, double platen_travel) {
+  energy_in_ += std::abs(platen_force * platen_travel);
+  if (initial_elastic_counted_) return;
+  energy_in_ += engine_->elastic_energy();
+  initial_elastic_counted_ = true;
+}
 
 void Simulation::check_guards(const char* phase, double dt, bool full) {
   GuardContext at;
@@ -398,7 +406,7 @@ void Simulation::step_once(double dt, RunState& st) {
   time_ += dt;
   ++step_;
   st = state();
-  account_platen_work(st.platen_force, st.platen_height - z_before);
+  account_step(st.platen_force, st.platen_height - z_before);
   if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
     t0 = Clock::now();
     update_open_scene();

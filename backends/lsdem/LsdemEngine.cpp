@@ -58,6 +58,7 @@ struct LsdemEngine::Item {
   Vec3 point, normal;
   double fsum = 0;
   double overlap = 0;  // deepest node penetration (m)
+  double elastic = 0;  // energy in the normal spring (J; 2D: J/m)
   bool contact = false;
   long queries = 0, pen = 0, tree_queries = 0;
 };
@@ -447,6 +448,8 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
     out.normal += n.n * fn;
   }
   out.overlap = delta;
+  // The normal spring's energy, ∫F_n dδ: ½·k_n·δ² (linear), (2/5)·k·δ^(5/2) (Hertz).
+  out.elastic = (L.hertz ? 0.4 : 0.5) * Fn * delta;
   out.contact = true;
 }
 
@@ -856,6 +859,7 @@ void LsdemEngine::reduce_forces(const std::vector<Wall>& W, std::size_t npairs) 
   floor_force_ = 0;
   container_wall_force_.fill(0.0);
   for (auto& f : shape_wall_force_) f = {};
+  elastic_energy_ = 0;
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
     const Item& it = items_[k];
@@ -864,6 +868,7 @@ void LsdemEngine::reduce_forces(const std::vector<Wall>& W, std::size_t npairs) 
     pen += it.pen;
     tree += it.tree_queries;
     if (!it.contact) continue;
+    elastic_energy_ += it.elastic;
     if (apply_contact(it, W)) ++pairs_in_contact;
   }
   // States of grain–wall contacts that no longer overlap go.

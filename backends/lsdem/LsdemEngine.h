@@ -170,6 +170,8 @@ class LsdemEngine final : public Engine {
   void set_threads(int n) { s_.threads = n < 1 ? 1 : n; }
   // Kinetic energy (J; 2D: per metre) of the grains, translational + rotational.
   double kinetic_energy() const;
+  // The normal springs' energy at the last force evaluation (Engine::elastic_energy).
+  double elastic_energy() const override { return elastic_energy_; }
 
   struct ShapeData;
   struct Body;
@@ -255,6 +257,7 @@ class LsdemEngine final : public Engine {
   std::vector<Contact> contacts_;
   PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly
   double platen_force_ = 0, floor_force_ = 0;
+  double elastic_energy_ = 0;  // J (2D: J/m), summed over the last step's contacts
   std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
   LsdemStats stats_;
