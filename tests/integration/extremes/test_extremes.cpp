@@ -432,6 +432,21 @@ json overlapping_lattice(const std::string& engine, int dim, double fraction) {
   return s;
 }
 
+// At the overlap tolerance (1 % of the diameter) the lattice is accepted: an overlap equal to
+// the tolerance up to rounding is not more than it. Past it (1.01 %, and by 1e-7 of it) the
+// refusal prints both numbers with the digits that tell them apart.
+TEST_P(Extremes, LatticeAtTheOverlapToleranceIsAccepted) {
+  const CliResult at = run_cli("validate " + write_scenario(overlapping_lattice(engine(), dim(), 0.01), "lattice_at"));
+  EXPECT_EQ(at.status, 0) << at.output;
+  const CliResult past = run_cli("validate " + write_scenario(overlapping_lattice(engine(), dim(), 0.0101), "lattice_past"));
+  EXPECT_EQ(past.status, 2) << past.output;
+  EXPECT_NE(past.output.find("by 2.02e-05 m, more than the tolerance 2e-05 m"), std::string::npos) << past.output;
+  // 1e-7 past it: %g would print both as 2e-05.
+  const CliResult hair = run_cli("validate " + write_scenario(overlapping_lattice(engine(), dim(), 0.01000001), "lattice_hair"));
+  EXPECT_EQ(hair.status, 2) << hair.output;
+  EXPECT_NE(hair.output.find("by 2.000002e-05 m, more than the tolerance 2e-05 m"), std::string::npos) << hair.output;
+}
+
 // A lattice overlapping by 0.99 % of the diameter runs with the guards on: the elastic energy
 // stored in its overlaps is counted as energy present at the start.
 TEST_P(Extremes, LatticeOverlappingWithinTheToleranceRuns) {
