@@ -105,6 +105,7 @@ SimulationState Simulation::saved_state() const {
   s.small_grains_removed = guard_max_.small_grains_removed;
   s.guard_max_overlap_fraction = guard_max_.max_overlap_fraction;
   s.guard_max_energy_ratio = guard_max_.energy_ratio;
+  s.analysis_failures = analysis_failures_;
   s.rocks_fed = fed_;
   s.mass_fed = mass_fed_;
   s.product = product_;
@@ -161,6 +162,7 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   guard_max_.small_grains_removed = st.small_grains_removed;
   guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
   guard_max_.energy_ratio = st.guard_max_energy_ratio;
+  analysis_failures_ = st.analysis_failures;
   fed_ = st.rocks_fed;
   mass_fed_ = st.mass_fed;
   product_ = st.product;

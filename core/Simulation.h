@@ -63,6 +63,9 @@ struct SimulationState {
   long small_grain_overlaps = 0;
   long small_grains_removed = 0;  // tiny grains that left the container, taken out as fines
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
+  // Breakage analyses or fragment builds that threw, by the error's leading word
+  // (summary.json: analyses_failed_<word>).
+  std::map<std::string, long> analysis_failures;
   // Open scenes (core/OpenScene.h): rocks fed so far (the next one is the feed's rock number
   // rocks_fed), their mass, and the product collected so far. The moving walls' pose follows
   // from `time` (their motion is prescribed).

@@ -151,6 +151,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"guard_max_overlap_fraction", st.guard_max_overlap_fraction},
                 {"guard_max_energy_ratio", st.guard_max_energy_ratio}};
   for (const auto& [reason, n] : st.screened.items()) j["state"][std::string("screened_") + reason] = n;
+  if (!st.analysis_failures.empty()) j["state"]["analyses_failed"] = st.analysis_failures;
   if (sim.container().open || sim.feed().count > 0) j["state"]["open_scene"] = open_scene_json(st);
   // Shared shapes are written once.
   std::map<const Shape*, std::size_t> index;
@@ -228,14 +229,21 @@ std::vector<ProductGrain> read_product(const Config& oc) {
   return out;
 }
 
-// An open scene's feed and product into `st`.
-void read_open_scene(const Config& s, SimulationState& st) {
-  if (!s.has("open_scene")) return;
-  const Config oc = s.required_child("open_scene");
-  st.rocks_fed = oc.integer("rocks_fed", 0, 0);
-  st.mass_fed = oc.number("mass_fed", 0, 0);
-  st.product_mass = oc.number("product_mass", 0, 0);
-  st.product = read_product(oc);
+// An open scene's feed and product, and the analyses that failed, into `st`.
+void read_scene_and_failures(const Config& s, SimulationState& st) {
+  if (s.has("open_scene")) {
+    const Config oc = s.required_child("open_scene");
+    st.rocks_fed = oc.integer("rocks_fed", 0, 0);
+    st.mass_fed = oc.number("mass_fed", 0, 0);
+    st.product_mass = oc.number("product_mass", 0, 0);
+    st.product = read_product(oc);
+  }
+  if (s.has("analyses_failed")) {
+    if (!s.is_object("analyses_failed")) s.fail("analyses_failed", "expected an object {reason: count}");
+    const Config fc = s.child("analyses_failed");
+    for (auto it = fc.doc().begin(); it != fc.doc().end(); ++it)
+      st.analysis_failures[it.key()] = fc.integer(it.key(), 0, 0);
+  }
 }
 
 // The loop state of a checkpoint's "state" object.
@@ -267,7 +275,7 @@ SimulationState read_state(const Config& s) {
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   for (const auto& [reason, n] : ScreeningCounts{}.items())  // absent in older checkpoints: 0
     *st.screened.find(reason) = s.integer(std::string("screened_") + reason, 0, 0);
-  read_open_scene(s, st);
+  read_scene_and_failures(s, st);
   return st;
 }
 
