@@ -64,6 +64,44 @@ long settling_step(const fs::path& checkpoint) {
   return cp.contains("settling") ? cp["settling"]["steps"].get<long>() : -1;
 }
 
+// One settling resume: `scenario` (a file in scenarios/) run with `sets` to its end into
+// NAME/whole; the same run killed with SIGKILL at a settling step drawn from `seed` in
+// [first_kill, settling steps − kill_margin] into NAME/killed, then resumed there. The
+// settling must take more than `min_settle` steps, and the kill must land inside it.
+struct SettlingResume {
+  fs::path whole, killed;
+  nlohmann::json whole_summary, resumed_summary;
+  long resumed_at = -1;  // the settling step of the checkpoint the run resumed from
+};
+
+void kill_while_settling_and_resume(const std::string& name, const std::string& scenario, const std::string& sets,
+                                    long min_settle, long first_kill, long kill_margin, unsigned seed,
+                                    SettlingResume& r) {
+  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / name;
+  r.whole = base / "whole";
+  r.killed = base / "killed";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/" + scenario;
+  const auto a = run_cli("run " + scen + " --out " + r.whole.string() + sets);
+  ASSERT_EQ(a.status, 0) << a.output;
+  r.whole_summary = nlohmann::json::parse(slurp(r.whole / "summary.json"));
+  const long settle = r.whole_summary["packing_settle_steps"].get<long>();
+  ASSERT_GT(settle, min_settle);
+  std::mt19937 rng(seed);
+  const long kill_step = std::uniform_int_distribution<long>(first_kill, settle - kill_margin)(rng);
+  run_and_kill_settling(std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + r.killed.string() + sets, r.killed,
+                        kill_step);
+  ASSERT_TRUE(fs::exists(r.killed / "checkpoint.json")) << "kill step " << kill_step;
+  r.resumed_at = settling_step(r.killed / "checkpoint.json");
+  ASSERT_GE(r.resumed_at, kill_step) << "killed after the settling";
+  ASSERT_FALSE(fs::exists(r.killed / "packing.json")) << "killed after the settling (kill step " << kill_step << ")";
+  const auto b = run_cli("run " + scen + " --out " + r.killed.string() + sets + " --resume");
+  ASSERT_EQ(b.status, 0) << b.output;
+  r.resumed_summary = nlohmann::json::parse(slurp(r.killed / "summary.json"));
+  EXPECT_EQ(r.resumed_summary["resumed_from_settle_step"].get<long>(), r.resumed_at);
+}
+
 // summary.json without its wall times, resume markers and representation counts.
 std::string summary_but_process(const fs::path& file) {
   auto j = nlohmann::json::parse(slurp(file));
@@ -376,38 +414,21 @@ TEST(Resume, CutRowsOfAKilledRunAreDropped) {
 // settles on from the checkpoint and writes every file as the uninterrupted run does, byte for
 // byte, but for wall times (the packing, the series, the summary).
 TEST(Resume, LsdemSettlingResumedAfterSigkillIsBitIdentical) {
-  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / "settling_lsdem";
-  const fs::path whole = base / "whole", killed = base / "killed";
-  fs::remove_all(base);
-  fs::create_directories(base);
-  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
   // 80 disks and polygons settling for 20000 steps; a short loading after it.
   const std::string sets =
       " --quiet --threads 1 --set simulation.max_steps=300 --set output.checkpoint_every=2000"
       " --set output.checkpoint_every_s=0 --set output.plots=false";
-  const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
-  ASSERT_EQ(a.status, 0) << a.output;
-  const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
-  const long settle = sa["packing_settle_steps"].get<long>();
-  ASSERT_GT(settle, 8000);
-  std::mt19937 rng(20260521);
-  const long kill_step = std::uniform_int_distribution<long>(2000, settle - 4000)(rng);
-  run_and_kill_settling(std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + killed.string() + sets, killed,
-                        kill_step);
-  ASSERT_TRUE(fs::exists(killed / "checkpoint.json")) << "kill step " << kill_step;
-  const long resumed_at = settling_step(killed / "checkpoint.json");
-  ASSERT_GE(resumed_at, kill_step) << "killed after the settling";
-  ASSERT_FALSE(fs::exists(killed / "packing.json")) << "killed after the settling (kill step " << kill_step << ")";
-  const auto b = run_cli("run " + scen + " --out " + killed.string() + sets + " --resume");
-  ASSERT_EQ(b.status, 0) << b.output;
-  const auto sb = nlohmann::json::parse(slurp(killed / "summary.json"));
-  EXPECT_EQ(sb["resumed_from_settle_step"].get<long>(), resumed_at);
-  EXPECT_FALSE(sb.contains("resumed_from_step"));
-  EXPECT_EQ(summary_but_process(whole / "summary.json"), summary_but_process(killed / "summary.json"));
-  ASSERT_EQ(files_under(whole), files_under(killed));
-  for (const auto& f : files_under(whole)) {
+  SettlingResume r;
+  kill_while_settling_and_resume("settling_lsdem", "oedometer_rigid_2d_quick.json", sets, 8000, 2000, 4000, 20260521,
+                                 r);
+  if (HasFatalFailure()) return;
+  EXPECT_FALSE(r.resumed_summary.contains("resumed_from_step"));
+  EXPECT_EQ(summary_but_process(r.whole / "summary.json"), summary_but_process(r.killed / "summary.json"));
+  ASSERT_EQ(files_under(r.whole), files_under(r.killed));
+  for (const auto& f : files_under(r.whole)) {
     if (f == "summary.json" || f == "stages.csv") continue;
-    EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (resumed at settling step " << resumed_at << ")";
+    EXPECT_TRUE(slurp(r.whole / f) == slurp(r.killed / f))
+        << f << " differs (resumed at settling step " << r.resumed_at << ")";
   }
 }
 
@@ -419,37 +440,20 @@ TEST(Resume, BulletSettlingResumedAfterSigkillStaysWithinTolerance) {
   bool bullet = false;
   for (const auto& e : crumble::engines().entries()) bullet |= e.name == "bullet";
   if (!bullet) GTEST_SKIP() << "needs the bullet engine";
-  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / "settling_bullet";
-  const fs::path whole = base / "whole", killed = base / "killed";
-  fs::remove_all(base);
-  fs::create_directories(base);
-  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json";
   // 40 spheres settling in about 1100 steps, then a ramp to 3 MPa in 250 steps.
   const std::string sets =
       " --quiet --threads 1 --set packing.count=40 --set container.lx=5e-3 --set container.ly=5e-3"
       " --set loading.max_stress=3e6 --set engine.solver_iterations=100 --set output.checkpoint_every=100"
       " --set output.checkpoint_every_s=0 --set output.plots=false";
-  const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
-  ASSERT_EQ(a.status, 0) << a.output;
-  const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
-  const long settle = sa["packing_settle_steps"].get<long>();
-  ASSERT_GT(settle, 500);
-  std::mt19937 rng(521);
-  const long kill_step = std::uniform_int_distribution<long>(100, settle - 200)(rng);
-  run_and_kill_settling(std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + killed.string() + sets, killed,
-                        kill_step);
-  ASSERT_TRUE(fs::exists(killed / "checkpoint.json"));
-  const long resumed_at = settling_step(killed / "checkpoint.json");
-  ASSERT_GE(resumed_at, kill_step) << "killed after the settling";
-  const auto b = run_cli("run " + scen + " --out " + killed.string() + sets + " --resume");
-  ASSERT_EQ(b.status, 0) << b.output;
-  const auto sb = nlohmann::json::parse(slurp(killed / "summary.json"));
-  EXPECT_EQ(sb["resumed_from_settle_step"].get<long>(), resumed_at);
+  SettlingResume r;
+  kill_while_settling_and_resume("settling_bullet", "oedometer_rigid_quick.json", sets, 500, 100, 200, 521, r);
+  if (HasFatalFailure()) return;
+  const nlohmann::json &sa = r.whole_summary, &sb = r.resumed_summary;
   EXPECT_EQ(sb["steps"], sa["steps"]);
   EXPECT_EQ(sb["packing_settled"], 1.0);
   const double ea = sa["void_ratio_final"].get<double>(), eb = sb["void_ratio_final"].get<double>();
-  EXPECT_NEAR(eb, ea, 0.05 * ea) << "resumed at settling step " << resumed_at;
-  EXPECT_EQ(data_rows(slurp(killed / "series.csv")), data_rows(slurp(whole / "series.csv")));
+  EXPECT_NEAR(eb, ea, 0.05 * ea) << "resumed at settling step " << r.resumed_at;
+  EXPECT_EQ(data_rows(slurp(r.killed / "series.csv")), data_rows(slurp(r.whole / "series.csv")));
 }
 
 // A run killed while its packing settles, before the settling's first checkpoint, leaves
