@@ -53,6 +53,7 @@ void write_fields(std::ostream& os, const std::vector<VtpPiece::Field>& fields, 
         throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
                                  f.name + "'");
       if (f.integer) os << static_cast<long long>(v);
+      else if (f.exact) os << std::setprecision(17) << v << std::setprecision(6);
       else os << v;
       os << ((i + 1) % f.components == 0 ? '\n' : ' ');
     }
@@ -190,6 +191,25 @@ void VtkWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&)
 
 namespace {
 
+// Pose, volume and mass of each grain, at full precision (crumble's Python reader sums the
+// masses to the summary's mass_final_kg): `position` (centroid, m), `orientation` (unit
+// quaternion body → world, w x y z), `volume` (m³; 2D: m² of the outline) and `mass` (kg;
+// 2D: per m of thickness).
+void declare_pose_fields(VtpPiece& p) {
+  p.cell_field("position", 3).exact = true;
+  p.cell_field("orientation", 4).exact = true;
+  p.cell_field("volume").exact = true;
+  p.cell_field("mass").exact = true;
+}
+
+void push_pose(VtpPiece& p, const Grain& g, double density) {
+  push3(p.cell_field("position", 3).values, g.position);
+  auto& q = p.cell_field("orientation", 4).values;
+  q.insert(q.end(), {g.orientation.w, g.orientation.x, g.orientation.y, g.orientation.z});
+  p.cell_field("volume").values.push_back(g.shape->volume());
+  p.cell_field("mass").values.push_back(g.mass(density));
+}
+
 VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Contact>>& on) {
   VtpPiece p;
   p.kind = VtpPiece::Cells::Polys;
@@ -207,6 +227,7 @@ VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Conta
   p.cell_field("diameter");
   p.cell_field("velocity", 3);
   p.cell_field("angular_velocity", 3);
+  declare_pose_fields(p);
   if (!measure.empty()) p.cell_field(measure);
   for (const auto& n : strength_names) p.cell_field(n);
   for (const char* n : shape_names) p.cell_field(n);
@@ -251,6 +272,7 @@ VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Conta
       p.cell_field("diameter").values.push_back(g.shape->equivalent_diameter());
       push3(p.cell_field("velocity", 3).values, g.velocity);
       push3(p.cell_field("angular_velocity", 3).values, g.angular_velocity);
+      push_pose(p, g, sim.context().materials[g.material].density);
       if (!measure.empty()) p.cell_field(measure).values.push_back(load);
       // -1: the grain has no such value (cannot happen with one model; kept explicit).
       for (const auto& n : strength_names) p.cell_field(n).values.push_back(g.strength.get_or(n, -1.0));

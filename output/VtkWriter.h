@@ -58,6 +58,7 @@ struct VtpPiece {
     int components = 1;
     bool integer = false;
     std::vector<double> values;  // components × count
+    bool exact = false;          // 17 significant digits: the double reads back bit for bit
   };
   std::vector<Field> point_fields, cell_fields;
 
