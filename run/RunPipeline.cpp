@@ -483,6 +483,7 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
   auto progress = [&](const RunState& s, double f) {
     const double el = seconds_since(t_loading);
     eta.add(el, f);
+    if (req.on_progress) req.on_progress(s, f, el, eta.eta_s());
     if (req.quiet || el - last_line < every) return;
     last_line = el;
     std::cerr << "crumble: " << format_progress(s, f, el, eta.eta_s()) << "\n";
@@ -623,6 +624,10 @@ void install_stop_signals() {
 bool stop_requested() { return g_stop.load(); }
 int received_signal() { return g_signal.load(); }
 int interrupted_status() { return g_signal.load() == SIGINT ? 130 : 143; }
+void clear_stop_request() {
+  g_signal.store(0);
+  g_stop.store(false);
+}
 
 // FIPS 180-4 SHA-256.
 std::string sha256_hex(const std::string& bytes) {

@@ -15,6 +15,7 @@
 
 #include "base/Errors.h"
 #include "core/AnalysisExecutor.h"
+#include "core/Observer.h"
 #include "scenarios/ScenarioFactory.h"
 
 namespace crumble {
@@ -48,6 +49,11 @@ struct RunRequest {
   // summary.json then says how many ranks ran analyses ("analysis_ranks").
   std::function<std::shared_ptr<AnalysisExecutor>(const nlohmann::json& document, const Scenario& sc)>
       analysis_executor;
+  // Called with each progress line's figures (about once a second of wall time during the
+  // loading, --quiet or not): the state, the loading's fraction done [0, 1], the seconds since
+  // the loading started and the estimated seconds left (< 0: unknown). The Python module's
+  // `progress=` (python/). An exception it throws ends the run as a failure (status 1).
+  std::function<void(const RunState& state, double fraction, double elapsed_s, double eta_s)> on_progress;
 };
 
 struct RunResult {
@@ -77,6 +83,9 @@ void install_stop_signals();
 bool stop_requested();
 int received_signal();      // 0 when none
 int interrupted_status();   // 130 after SIGINT, 143 after SIGTERM
+// Forgets a received signal, so that the next run of this process runs (the Python module,
+// whose process outlives an interrupted run).
+void clear_stop_request();
 
 // SHA-256 (FIPS 180-4) of a file's bytes as 64 lower-case hex digits, what `sha256sum` prints.
 // Throws InputError when the file cannot be read.
