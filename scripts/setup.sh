@@ -12,7 +12,9 @@
 # Without --target everything is built (the crumble binary and every test program: what
 # `ctest` needs); `--target crumble` builds only the binary (the README's first command).
 # python3-matplotlib draws the PNG figures of a run (scripts/crumble_plot.py); without it a
-# run still writes every CSV.
+# run still writes every CSV. pybind11-dev, python3-dev, python3-numpy and python3-pandas give
+# the Python package (build/python, docs/python.md; `--target crumble_python` builds only it);
+# without them the C++ build goes on and says how to get it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,10 +33,12 @@ while [ $# -gt 0 ]; do
 done
 
 packages=(g++ cmake make pkg-config libbullet-dev libode-dev libeigen3-dev libcgal-dev
-          nlohmann-json3-dev libgtest-dev libcli11-dev python3-matplotlib)
+          nlohmann-json3-dev libgtest-dev libcli11-dev python3-matplotlib
+          pybind11-dev python3-dev python3-numpy python3-pandas)
 # Only the test suite reads the ParaView files back (tests/integration/paraview); python3-vtk9
 # pulls in Qt, so a build of selected targets (the README's run command) goes without it.
-[ ${#targets[@]} -eq 0 ] && packages+=(python3-vtk9)
+# python3-pytest runs the Python suite (ctest -L python).
+[ ${#targets[@]} -eq 0 ] && packages+=(python3-vtk9 python3-pytest)
 builddir=build
 if [ "$mpi" -eq 1 ]; then
   packages+=(libopenmpi-dev openmpi-bin)

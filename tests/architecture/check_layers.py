@@ -11,7 +11,7 @@ import sys
 LAYERS = {
     "base": 0, "geometry": 1, "geometry/cgal": 1, "core": 2,
     "backends": 3, "breakage": 3, "geometry/alpha_shape": 3, "geometry/level_set": 3,
-    "output": 4, "scenarios": 5, "run": 6, "parallel": 6.5, "tools": 7, "apps": 8,
+    "output": 4, "scenarios": 5, "run": 6, "parallel": 6.5, "tools": 7, "apps": 8, "python": 8,
 }
 SIBLINGS = {("geometry/cgal", "geometry"), ("geometry", "geometry/cgal")}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+(?:/[a-z_]+)*)/[A-Za-z0-9_]+\.h"')
