@@ -212,6 +212,7 @@ PYBIND11_MODULE(_crumble, m) {
       .def_readwrite("force", &RunRequest::force)
       .def_readwrite("resume", &RunRequest::resume)
       .def_readwrite("quiet", &RunRequest::quiet)
-      .def_readwrite("plots", &RunRequest::plots);
+      .def_readwrite("plots", &RunRequest::plots)
+      .def_readwrite("packing_only", &RunRequest::packing_only);
   m.def("run", &run, py::arg("request"), py::arg("progress"));
 }

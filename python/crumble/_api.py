@@ -84,14 +84,15 @@ def _checked_int(name, v, lo, hi):
 
 
 def run(scenario, out, seed=None, threads=None, progress=None, resume=False, force=False, quiet=True,
-        plots=False):
+        plots=False, packing_only=False):
     """Runs a scenario (a file path, a dict or a crumble.Scenario) into ``out`` in this process,
     through the pipeline ``crumble run`` uses; returns the crumble.Run. ``progress``: a callable
     given a dict (step, time_s, fraction, elapsed_s, eta_s, platen_stress_Pa, axial_strain,
     grains, breakage_events) about once a second of the loading. Ctrl-C (SIGINT) ends the run
     at the end of its step with every output and the checkpoint written, then raises
-    KeyboardInterrupt; ``resume=True`` continues it. Bad input: crumble.InputError; a failure
-    while running: crumble.RunFailed."""
+    KeyboardInterrupt; ``resume=True`` continues it. ``packing_only=True`` stops once the
+    packing is settled and out/packing.json written (what compare and sweep do first). Bad
+    input: crumble.InputError; a failure while running: crumble.RunFailed."""
     sc = as_scenario(scenario)
     if not isinstance(out, (str, os.PathLike)) or not os.fspath(out):
         raise InputError(f"out: expected an output folder path, got {out!r}")
@@ -102,6 +103,7 @@ def run(scenario, out, seed=None, threads=None, progress=None, resume=False, for
     req.seed = _checked_int("seed", seed, 0, 2**64 - 1)
     req.threads = _checked_int("threads", threads, 1, 1024)
     req.force, req.resume, req.quiet, req.plots = bool(force), bool(resume), bool(quiet), bool(plots)
+    req.packing_only = bool(packing_only)
     status, summary, reason = native().run(req, progress)
     if status == 130:
         raise KeyboardInterrupt(f"crumble: run interrupted ({reason}); outputs in {out}, "
