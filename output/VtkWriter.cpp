@@ -210,6 +210,22 @@ void push_pose(VtpPiece& p, const Grain& g, double density) {
   p.cell_field("mass").values.push_back(g.mass(density));
 }
 
+// The grain's surface in world coordinates: 3D its mesh's triangles, 2D its outline as one
+// polygon. Returns the number of cells added.
+std::size_t add_grain_surface(VtpPiece& p, const Grain& g) {
+  if (g.shape->dimension() == 3) {
+    const TriMesh& m = g.shape->mesh();
+    const long base = static_cast<long>(p.points.size());
+    for (const auto& v : m.vertices) p.points.push_back(g.to_world(v));
+    for (const auto& t : m.triangles) p.cells.push_back({base + t[0], base + t[1], base + t[2]});
+    return m.triangles.size();
+  }
+  std::vector<Vec3> poly;
+  for (const auto& v : g.shape->outline()) poly.push_back(g.to_world(v));
+  add_polygon_cell(p, poly);
+  return 1;
+}
+
 VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Contact>>& on) {
   VtpPiece p;
   p.kind = VtpPiece::Cells::Polys;
@@ -250,19 +266,7 @@ VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Conta
         throw std::runtime_error("breakage model '" + model.name() + "' gave a non-finite " + measure + " for grain " +
                                  std::to_string(g.id));
     }
-    std::size_t ncells = 0;
-    if (g.shape->dimension() == 3) {
-      const TriMesh& m = g.shape->mesh();
-      const long base = static_cast<long>(p.points.size());
-      for (const auto& v : m.vertices) p.points.push_back(g.to_world(v));
-      for (const auto& t : m.triangles) p.cells.push_back({base + t[0], base + t[1], base + t[2]});
-      ncells = m.triangles.size();
-    } else {
-      std::vector<Vec3> poly;
-      for (const auto& v : g.shape->outline()) poly.push_back(g.to_world(v));
-      add_polygon_cell(p, poly);
-      ncells = 1;
-    }
+    const std::size_t ncells = add_grain_surface(p, g);
     for (std::size_t c = 0; c < ncells; ++c) {
       p.cell_field("grain", 1, true).values.push_back(static_cast<double>(g.id));
       p.cell_field("parent", 1, true).values.push_back(static_cast<double>(g.parent));
