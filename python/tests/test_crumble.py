@@ -158,7 +158,9 @@ _INTERRUPTED = textwrap.dedent("""
     try:
         crumble.run(long_rigid_grain(10**7), out=sys.argv[2], progress=lambda d: print("progress", d["step"], flush=True))
     except KeyboardInterrupt as e:
-        print("interrupted:", e, flush=True)
+        import signal
+        print("interrupted:", e, "python handler back:", signal.getsignal(signal.SIGINT) is signal.default_int_handler,
+              flush=True)
         sys.exit(7)
 """)
 
@@ -171,7 +173,7 @@ def test_sigint_leaves_a_resumable_folder(tmp_path):
     p.send_signal(signal.SIGINT)
     rest = p.stdout.read()
     assert p.wait(timeout=60) == 7, rest
-    assert "resume=True" in rest
+    assert "resume=True" in rest and "python handler back: True" in rest
     assert (out / "checkpoint.json").exists() and (out / "summary.json").exists()
     step = json.loads((out / "summary.json").read_text())["steps"]
     r = crumble.run(long_rigid_grain(step + 100), out=out, resume=True)
