@@ -79,7 +79,27 @@ GrainId Simulation::add_grain(Grain g) {
   return grains_.back().id;
 }
 
-void Simulation::add_observer(std::shared_ptr<Observer> o) { observers_.push_back(std::move(o)); }
+void Simulation::add_observer(std::shared_ptr<Observer> o) {
+  observers_.push_back(std::move(o));
+  observer_seconds_.push_back(0.0);
+}
+
+template <class F>
+void Simulation::notify(F&& call) {
+  for (std::size_t i = 0; i < observers_.size(); ++i) {
+    const auto t0 = Clock::now();
+    call(*observers_[i]);
+    const double dt = seconds_since(t0);
+    observer_seconds_[i] += dt;
+    timings_.observers += dt;
+  }
+}
+
+void Simulation::tally_output() {
+  timings_.output_by_writer.clear();
+  for (std::size_t i = 0; i < observers_.size(); ++i)
+    timings_.output_by_writer[observers_[i]->name()] += observer_seconds_[i];
+}
 
 SimulationState Simulation::saved_state() const {
   SimulationState s = resumed_ ? resumed_from_ : SimulationState{};
@@ -280,11 +300,8 @@ RunSummary Simulation::run(const Progress& progress) {
       check_breakage(st);
       st = state();
     }
-    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
-      const auto t0 = Clock::now();
-      for (auto& o : observers_) o->on_sample(*this, st);
-      timings_.observers += seconds_since(t0);
-    }
+    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0)
+      notify([&](Observer& o) { o.on_sample(*this, st); });
     if (progress && seconds_since(last_progress) > 1.0) {
       last_progress = Clock::now();
       progress(st, loading_.progress(time_, st.platen_stress, st.axial_strain));
@@ -306,12 +323,11 @@ RunSummary Simulation::run(const Progress& progress) {
   }
   check_guards("loading", dt_, true);
   st = state();
-  for (auto& o : observers_) o->on_sample(*this, st);
+  notify([&](Observer& o) { o.on_sample(*this, st); });
   sync_grains();
   fill_summary(sum, st);
-  auto t0 = Clock::now();
-  for (auto& o : observers_) o->on_finish(*this, st, sum);
-  timings_.observers += seconds_since(t0);
+  notify([&](Observer& o) { o.on_finish(*this, st, sum); });
+  tally_output();
   sum.timings = timings_;
   sum.wall_seconds = seconds_since(t_start);
   return sum;
@@ -337,7 +353,7 @@ RunState Simulation::start_run(RunSummary& sum) {
   initial_mass_ = sum.mass_initial;
   initial_void_ratio_ = sum.void_ratio_initial;
   sum.max_platen_stress = max_platen_stress_;
-  for (auto& o : observers_) o->on_start(*this, st);
+  notify([&](Observer& o) { o.on_start(*this, st); });
 
   dt_ = time_step(0);
   const double bound = engine_->max_stable_dt();
@@ -468,6 +484,7 @@ void Simulation::check_breakage(const RunState& st) {
   run_analyses(b);
   build_fragments(b);
   const auto t0 = Clock::now();
+  const double observers0 = timings_.observers;
   std::vector<char> remove(grains_.size(), 0);
   std::vector<Grain> added;
   for (long k = 0; k < static_cast<long>(b.candidates.size()); ++k)
@@ -478,7 +495,8 @@ void Simulation::check_breakage(const RunState& st) {
     if (!remove[i]) kept.push_back(std::move(grains_[i]));
   for (auto& c : added) kept.push_back(std::move(c));
   grains_ = std::move(kept);
-  timings_.fragments += seconds_since(t0);
+  // The observers told of the outcomes count as output, not as fragment building.
+  timings_.fragments += std::max(0.0, seconds_since(t0) - (timings_.observers - observers0));
 }
 
 // The contacts, and the grains the screening selects with the loads their analyses get.
@@ -585,7 +603,7 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
     // as it was, before anything of it changed: the mass budget holds, and the run goes on.
     rec.analysis.broken = false;
     rec.analysis.outcome = "failed";
-    for (auto& o : observers_) o->on_analysis(*this, rec);
+    notify([&](Observer& o) { o.on_analysis(*this, rec); });
     note_analysis_failure(parent, b.errors[k]);
     return false;
   }
@@ -599,7 +617,7 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
   if (result.broken && crushed) rec.analysis.outcome = "crushed";
   else if (result.broken && pieces < 2) rec.analysis.outcome = "no_split";
   else if (result.broken && frag.children.size() == 1) rec.analysis.outcome = "chip";
-  for (auto& o : observers_) o->on_analysis(*this, rec);
+  notify([&](Observer& o) { o.on_analysis(*this, rec); });
   Grain& g = grains_[b.candidates[k]];
   if (!result.broken) {
     // Remembered for the skip rule (Screening.h) only when the rule is on, so that runs
@@ -647,7 +665,7 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   engine_->replace_grain(parent.id, children);
   for (auto& c : children) added.push_back(std::move(c));
   ++events_;
-  for (auto& o : observers_) o->on_breakage(*this, ev);
+  notify([&](Observer& o) { o.on_breakage(*this, ev); });
 }
 
 // The children of `parent`: ids, lineage, pose in the world (v + ω × (c_child − c_parent)),

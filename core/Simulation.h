@@ -163,6 +163,11 @@ class Simulation {
     std::vector<FragmentResult> frags;
     std::vector<std::string> errors;  // non-empty: the analysis or the fragment build threw
   };
+  // Every observer called with `call(observer)`, each call's wall time added to
+  // timings_.observers and to that observer's own tally (Timings::output_by_writer).
+  template <class F>
+  void notify(F&& call);
+  void tally_output();  // timings_.output_by_writer from the per-observer seconds
   RunState start_run(RunSummary& sum);
   double next_time_step(const RunState& st);
   void step_once(double dt, RunState& st);
@@ -194,6 +199,7 @@ class Simulation {
   Container container_;
   std::vector<Grain> grains_;
   std::vector<std::shared_ptr<Observer>> observers_;
+  std::vector<double> observer_seconds_;  // s, per observer (the same order)
   GrainId next_id_ = 0;
   double time_ = 0;
   long step_ = 0;

@@ -70,6 +70,7 @@ std::string vtp_text(const VtpPiece& piece);
 
 class VtkWriter : public Observer {
  public:
+  std::string name() const override { return "vtk"; }
   struct Settings {
     long every = 0;           // steps between snapshots (0 = none)
     bool final_state = true;  // a snapshot of the final state
@@ -94,6 +95,7 @@ class VtkWriter : public Observer {
 
 class AnalysisVtkWriter : public Observer {
  public:
+  std::string name() const override { return "vtk_analyses"; }
   // resume_step >= 0: keep the analyses of the earlier run up to that step.
   AnalysisVtkWriter(const std::string& dir, long resume_step = -1);
   void on_breakage(const Simulation& sim, const BreakageEvent& e) override;

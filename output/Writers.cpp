@@ -493,6 +493,9 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
                            {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
                            {"fragments", s.timings.fragments}, {"guards", s.timings.guards},
                            {"output", s.timings.observers}, {"loop", s.timings.loop}};
+  // `output` by writer (Observer::name()): the parts sum to `output`.
+  j["time_breakdown_s"]["output_by_writer"] = Json::object();
+  for (const auto& [name, seconds] : s.timings.output_by_writer) j["time_breakdown_s"]["output_by_writer"][name] = seconds;
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)

@@ -51,10 +51,10 @@ print("| run | wall s | loop s (engine + analyses + fragments + rest) | analyses
 print("|---|---|---|---|---|---|---|---|---|")
 for label, d in runs:
     t = s[d]["time_breakdown_s"]
-    loop = sum(t.values())
+    loop = sum(v for v in t.values() if isinstance(v, (int, float)))  # output_by_writer is inside output
     b = base["time_breakdown_s"]
     print(f"| {label} | {s[d]['wall_seconds']:.1f} | {loop:.1f} | {t['analyses']:.1f} | {t['fragments']:.1f} | {t['engine']:.1f} | "
-          f"{b['analyses'] / sum(b.values()):.2f} | {base['wall_seconds'] / s[d]['wall_seconds']:.2f} | "
+          f"{b['analyses'] / sum(v for v in b.values() if isinstance(v, (int, float))):.2f} | {base['wall_seconds'] / s[d]['wall_seconds']:.2f} | "
           f"{b['analyses'] / t['analyses']:.2f} |")
 r = s[f"ranks{n}"]
 print()
