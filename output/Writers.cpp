@@ -417,21 +417,27 @@ ShapeWriter::ShapeWriter(const std::string& dir, int dimension, long resume_step
            resume_step),
       last_step_(resume_step) {}
 
+const GrainShapeMetrics& ShapeMetricsCache::get(const Shape::Ptr& shape) {
+  auto it = now_.find(shape.get());
+  if (it != now_.end()) return it->second.second;
+  auto old = cache_.find(shape.get());
+  if (old != cache_.end()) return now_.emplace(shape.get(), std::move(old->second)).first->second.second;
+  ++computed_;
+  return now_.emplace(shape.get(), std::make_pair(shape, grain_shape_metrics(*shape))).first->second.second;
+}
+
+void ShapeMetricsCache::sweep() {
+  cache_ = std::move(now_);  // shapes no longer in use are released
+  now_.clear();
+}
+
 void ShapeWriter::on_sample(const Simulation& sim, const RunState& s) {
   if (s.step == last_step_) return;
   last_step_ = s.step;
-  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> now;
   double sum[3] = {0, 0, 0};
   long n[3] = {0, 0, 0};
   for (const auto& g : sim.grains()) {
-    auto it = now.find(g.shape.get());
-    if (it == now.end()) {
-      auto old = cache_.find(g.shape.get());
-      it = now.emplace(g.shape.get(), old != cache_.end() ? old->second
-                                                          : std::make_pair(g.shape, grain_shape_metrics(*g.shape)))
-               .first;
-    }
-    const GrainShapeMetrics& m = it->second.second;
+    const GrainShapeMetrics& m = cache_.get(g.shape);
     const double v[3] = {dim_ == 2 ? m.circularity : m.sphericity, dim_ == 2 ? m.aspect_ratio : m.elongation,
                          dim_ == 2 ? m.sieve_size : m.flatness};
     for (int k = 0; k < 3; ++k)
@@ -440,7 +446,7 @@ void ShapeWriter::on_sample(const Simulation& sim, const RunState& s) {
         ++n[k];
       }
   }
-  cache_ = std::move(now);  // shapes no longer in use are released
+  cache_.sweep();
   // No grain with a descriptor (none left in the engine): the row is left out, never NaN.
   if (n[0] == 0 || n[1] == 0 || n[2] == 0) return;
   last_means_ = {sum[0] / n[0], sum[1] / n[1], sum[2] / n[2]};

@@ -121,10 +121,25 @@ struct GrainShapeMetrics {
 };
 GrainShapeMetrics grain_shape_metrics(const Shape& shape);
 
+// grain_shape_metrics computed once per Shape (shared and immutable: a grain that breaks is
+// replaced by fragments with shapes of their own) and kept while a grain still uses it. A
+// sample looks up every grain's shape, then sweep() releases the shapes it did not look up:
+// each sample computes the descriptors of the new shapes only.
+class ShapeMetricsCache {
+ public:
+  const GrainShapeMetrics& get(const Shape::Ptr& shape);
+  void sweep();
+  std::size_t computed() const { return computed_; }  // descriptors computed so far
+
+ private:
+  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> cache_, now_;
+  std::size_t computed_ = 0;
+};
+
 // shape.csv: number means of the grains' shape descriptors against strain and stress, one row
 // per series sample (time_s, step, axial_strain, platen_stress_Pa, grains, then 2D
 // mean_circularity, mean_aspect_ratio, mean_sieve_size_m; 3D mean_sphericity, mean_EI,
-// mean_FI). Metrics are computed once per Shape (shared, immutable) and cached while in use.
+// mean_FI). Metrics are computed once per Shape (ShapeMetricsCache).
 class ShapeWriter : public Observer {
  public:
   std::string name() const override { return "shape"; }
@@ -138,7 +153,7 @@ class ShapeWriter : public Observer {
   int dim_;
   CsvStream csv_;
   long last_step_ = -1;
-  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> cache_;
+  ShapeMetricsCache cache_;
   std::vector<double> last_means_;
 };
 
