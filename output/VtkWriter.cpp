@@ -281,11 +281,14 @@ VtkWriter::VtkWriter(const std::string& dir, Settings settings, long resume_step
 void VtkWriter::add_to_collections(double time, long step) {
   grains_pvd_.add(time, step_name("grains", step, "vtp"));
   scene_pvd_.add(time, step_name("scene", step, "vtm"));
+  collections_written_ = false;
 }
 
-void VtkWriter::write_collections() const {
+void VtkWriter::write_collections() {
+  if (collections_written_) return;  // the files on disk hold them already
   write_file_atomic(dir_ + "/grains.pvd", grains_pvd_.text());
   write_file_atomic(dir_ + "/scene.pvd", scene_pvd_.text());
+  collections_written_ = true;
 }
 
 void VtkWriter::on_start(const Simulation& sim, const RunState& s) {
@@ -542,7 +545,11 @@ AnalysisVtkWriter::AnalysisVtkWriter(const std::string& dir, long resume_step) :
   }
 }
 
-void AnalysisVtkWriter::write_collection() const { write_file_atomic(dir_ + "/analyses.pvd", pvd_.text()); }
+void AnalysisVtkWriter::write_collection() {
+  if (collection_written_) return;  // the file on disk holds it already
+  write_file_atomic(dir_ + "/analyses.pvd", pvd_.text());
+  collection_written_ = true;
+}
 
 void AnalysisVtkWriter::on_breakage(const Simulation& sim, const BreakageEvent& e) {
   const auto& cloud = e.analysis.points;
@@ -569,6 +576,7 @@ void AnalysisVtkWriter::on_breakage(const Simulation& sim, const BreakageEvent& 
   std::snprintf(name, sizeof name, "analysis_%08ld_g%lld.vtp", e.step, static_cast<long long>(e.parent));
   write_file_atomic(dir_ + "/vtk/" + name, vtp_text(p));
   pvd_.add(e.time, name);
+  collection_written_ = false;
   write_collection();
 }
 

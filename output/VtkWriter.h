@@ -121,11 +121,12 @@ class VtkWriter : public Observer {
  private:
   void snapshot(const Simulation& sim, const RunState& s);
   void add_to_collections(double time, long step);
-  void write_collections() const;
+  void write_collections();
   std::string dir_;
   Settings set_;
   long last_ = -1;
   PvdCollection grains_pvd_, scene_pvd_;  // every snapshot
+  bool collections_written_ = false;      // the .pvd files hold every snapshot so far
   std::map<std::string, VtpTextCache> text_;  // by block (grains, walls, ...)
   ShapeMetricsCache metrics_;             // the grains' shape descriptors, once per shape
 };
@@ -139,9 +140,10 @@ class AnalysisVtkWriter : public Observer {
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
  private:
-  void write_collection() const;
+  void write_collection();
   std::string dir_;
   PvdCollection pvd_{true};
+  bool collection_written_ = false;  // analyses.pvd holds every analysis so far
 };
 
 // Names a run writes into vtk/ (and their temporary names), for `--force` cleaning.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fcntl.h>
 #include <filesystem>
 #include <iomanip>
 #include <limits>
@@ -31,6 +32,21 @@ void write_file_atomic(const std::string& path, const std::string& content) {
     out.flush();
     if (!out) throw std::runtime_error("write failed for '" + tmp + "'");
   }
+#ifdef RENAME_EXCHANGE
+  // An existing file is swapped with the new one, then the old one (now at tmp) removed:
+  // readers see the old or the new file, never a part, as with rename. A rename over an
+  // existing file makes ext4 (auto_da_alloc) write the new file's data out at once, 0.5-4 ms
+  // a file on a loaded machine, and the files rewritten at every snapshot (grains.pvd,
+  // scene.pvd) and every level (psd.csv) paid it each time. Without an existing file, or on a
+  // file system without the swap: rename.
+  std::error_code regular;
+  if (fs::is_regular_file(path, regular) &&
+      ::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, path.c_str(), RENAME_EXCHANGE) == 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    return;
+  }
+#endif
   std::error_code ec;
   fs::rename(tmp, path, ec);
   if (ec) throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
