@@ -255,25 +255,30 @@ struct NamedObserver : Observer {
   }
 };
 struct Unnamed : Observer {};
+
+// The squeeze loop on one sphere of 1 mm radius, broken by `builder`.
+std::unique_ptr<Simulation> one_grain_squeeze(std::unique_ptr<FragmentBuilder> builder, long max_steps = 0) {
+  SqueezeSetup u = squeeze_setup();
+  u.ss.max_steps = max_steps;
+  auto sim = std::make_unique<Simulation>(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
+                                          std::move(builder), EngineContext{}, u.ss, u.ls, u.sch, u.scr, 123);
+  sim->set_container({0.01, 0.01, 0.01, 0});
+  Grain g;
+  g.shape = Shape::sphere(1e-3);
+  sim->add_grain(g);
+  return sim;
+}
 }  // namespace
 
 // summary.json time_breakdown_s.output_by_writer: each observer's seconds under its name,
 // observers of one name summed, and the parts summing to output.
 TEST(SimulationLoop, OutputIsTimedPerWriterAndSumsToOutput) {
-  EngineContext ctx;
-  SqueezeSetup u = squeeze_setup();
-  u.ss.max_steps = 20;
-  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
-                 std::make_unique<EighthBuilder>(), ctx, u.ss, u.ls, u.sch, u.scr, 123);
-  sim.set_container({0.01, 0.01, 0.01, 0});
-  Grain g;
-  g.shape = Shape::sphere(1e-3);
-  sim.add_grain(g);
-  sim.add_observer(std::make_shared<NamedObserver>("slow", 2e-3));
-  sim.add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
-  sim.add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
-  sim.add_observer(std::make_shared<Unnamed>());
-  const RunSummary sum = sim.run();
+  const auto sim = one_grain_squeeze(std::make_unique<EighthBuilder>(), 20);
+  sim->add_observer(std::make_shared<NamedObserver>("slow", 2e-3));
+  sim->add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
+  sim->add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
+  sim->add_observer(std::make_shared<Unnamed>());
+  const RunSummary sum = sim->run();
   const auto& by = sum.timings.output_by_writer;
   ASSERT_EQ(by.size(), 3u);  // slow, twice, other
   // 20 samples in the loop and one at the end.
@@ -317,20 +322,13 @@ TEST(SimulationLoop, CachedShapeDescriptorsFollowTheFragments) {
   const fs::path dir = fs::temp_directory_path() / "crumble_simulation_loop" / "shape_cache";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  EngineContext ctx;
-  SqueezeSetup u = squeeze_setup();
-  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
-                 std::make_unique<BoxesBuilder>(), ctx, u.ss, u.ls, u.sch, u.scr, 123);
-  sim.set_container({0.01, 0.01, 0.01, 0});
-  Grain g;
-  g.shape = Shape::sphere(1e-3);
-  sim.add_grain(g);
-  sim.add_observer(std::make_shared<ShapeWriter>(dir.string(), 3));
-  sim.add_observer(std::make_shared<VtkWriter>(dir.string(), VtkWriter::Settings{1, true, false, 0}));
-  const RunSummary sum = sim.run();
+  const auto sim = one_grain_squeeze(std::make_unique<BoxesBuilder>());
+  sim->add_observer(std::make_shared<ShapeWriter>(dir.string(), 3));
+  sim->add_observer(std::make_shared<VtkWriter>(dir.string(), VtkWriter::Settings{1, true, false, 0}));
+  const RunSummary sum = sim->run();
   ASSERT_EQ(sum.breakage_events, 1);
   const double sphere = grain_shape_metrics(*Shape::sphere(1e-3)).sphericity;
-  const double box = grain_shape_metrics(*sim.grains().front().shape).sphericity;
+  const double box = grain_shape_metrics(*sim->grains().front().shape).sphericity;
   ASSERT_GT(std::abs(sphere - box), 0.1);
   const auto rows = read_csv((dir / "shape.csv").string());
   ASSERT_GT(rows.size(), 3u);
