@@ -22,6 +22,10 @@ struct FragmentResult {
   // Volume of pieces the builder dropped (e.g. level-set pieces thinner than a grid cell):
   // counted as removed mass (fines), never lost. 0 children and 0 removed = no split.
   double removed_volume = 0;
+  // Cost figures of resolution-refining builders (summary.json fragment_grid_nodes_per_child,
+  // fragment_refinements): nodes of the children's grids, splits repeated on a finer grid.
+  long grid_nodes = 0;
+  int refinements = 0;
 };
 
 class FragmentBuilder {
