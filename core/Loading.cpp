@@ -34,4 +34,8 @@ double Loading::progress(double t, double stress, double strain) const {
   return std::clamp(p, 0.0, 1.0);
 }
 
+double level_stress(const std::string& mode, double measured, double commanded) {
+  return mode == "stress_ramp" ? std::min(measured, commanded) : measured;
+}
+
 }  // namespace crumble

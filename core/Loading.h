@@ -38,4 +38,10 @@ class Loading {
   LoadingSettings s_;
 };
 
+// The stress at which a reported level (output.psd_at_stress) counts as reached: under a
+// stress ramp the smaller of the measured and the commanded stress (an explicit engine's
+// measured stress rings around the ramp, and a peak above a level the ramp has not yet
+// commanded is not that level reached), otherwise the measured stress.
+double level_stress(const std::string& mode, double measured, double commanded);
+
 }  // namespace crumble

@@ -115,6 +115,16 @@ SimulationState Simulation::saved_state() const {
 }
 
 void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
+  adopt(st, std::move(grains));
+  resumed_from_ = st;
+  resumed_ = true;
+}
+
+void Simulation::restore_packing(const SimulationState& st, std::vector<Grain> grains) {
+  adopt(st, std::move(grains));
+}
+
+void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   if (!grains_.empty()) throw std::logic_error("Simulation::resume: grains were already added");
   if (container_.height <= 0) throw std::logic_error("Simulation::resume: set the container first");
   for (auto& g : grains) {
@@ -145,8 +155,6 @@ void Simulation::resume(const SimulationState& st, std::vector<Grain> grains) {
   guard_max_.small_grains_removed = st.small_grains_removed;
   guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
   guard_max_.energy_ratio = st.guard_max_energy_ratio;
-  resumed_from_ = st;
-  resumed_ = true;
 }
 
 double Simulation::area() const {

@@ -76,6 +76,16 @@ struct SimulationState {
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
 };
 
+// Where the settling of a packing (scenarios/Packing.h) stands after a step: what a
+// checkpoint written while the packing settles keeps, so that the settling goes on from it
+// as if it had never stopped.
+struct SettleProgress {
+  long steps = 0;            // settling steps done
+  double last_platen = 0;    // m: platen position at the end of the last completed window
+  double dt = 0;             // s: the settling's time step
+  double mean_diameter = 0;  // m: the grains' mean equivalent diameter (convergence scale)
+};
+
 class Simulation {
  public:
   Simulation(std::unique_ptr<Engine> engine, std::unique_ptr<BreakageModel> model,
@@ -106,6 +116,10 @@ class Simulation {
   // and, instead of add_grain(), the grains and state of a checkpoint (container set first).
   SimulationState saved_state() const;
   void resume(const SimulationState& st, std::vector<Grain> grains);
+  // Instead of add_grain(), the grains and state of a checkpoint written while the packing
+  // settled (before run()): the guards' tallies and ids go on from it, and run() then starts
+  // as a fresh run does (its initial figures taken from the settled packing).
+  void restore_packing(const SimulationState& st, std::vector<Grain> grains);
   bool resumed() const { return resumed_; }
 
   // A flag (e.g. set by SIGINT/SIGTERM) that ends the loop after the current step; the run
@@ -223,6 +237,7 @@ class Simulation {
     double limited_change_max = 0;
   } solver_;
   void remove_escaped(const std::vector<GrainId>& ids);
+  void adopt(const SimulationState& st, std::vector<Grain> grains);  // resume()'s and restore_packing()'s part
   std::vector<MovingWall> walls_;
   std::vector<double> wall_radius_;  // bounding radius of each wall's shape
   FeedSettings feed_;

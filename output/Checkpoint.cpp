@@ -101,7 +101,7 @@ Shape::Ptr shape_from_saved_config(const Config& sc, int dim) {
   return sh;
 }
 
-Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& run_info) {
+Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& run_info, const SettleProgress* settling) {
   sim.sync_grains();
   const SimulationState st = sim.saved_state();
   Json j;
@@ -173,6 +173,11 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
   Json es;
   if (sim.engine().save_state(es)) j["engine_state"] = std::move(es);
   if (run_info.is_object() && !run_info.empty()) j["run"] = run_info;
+  if (settling)
+    j["settling"] = {{"steps", settling->steps},
+                     {"last_platen_position", settling->last_platen},
+                     {"dt", settling->dt},
+                     {"mean_diameter", settling->mean_diameter}};
   return j;
 }
 
@@ -296,6 +301,15 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
   }
   for (auto& gc : c.children("grains")) cp.grains.push_back(read_grain(gc, shapes));
   if (c.has("engine_state")) cp.engine_state = c.raw("engine_state");
+  if (c.has("settling")) {
+    const Config s = c.required_child("settling");
+    SettleProgress p;
+    p.steps = s.integer("steps", 0, 0);
+    p.last_platen = s.number("last_platen_position");
+    p.dt = s.positive("dt");
+    p.mean_diameter = s.positive("mean_diameter");
+    cp.settling = p;
+  }
   if (c.has("run")) {
     cp.run_info = c.raw("run");
     if (!cp.run_info.is_object()) c.fail("run", "expected an object");

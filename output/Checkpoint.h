@@ -4,9 +4,11 @@
 // (Engine::save_state: lsdem), the engine's own state (contact history, half-step
 // velocities, platen motion), so that a resumed lsdem run is bit-identical to an
 // uninterrupted one. Other engines are rebuilt from the grains: their contact history and
-// solver warm starts begin afresh at the resume point (docs/scenarios.md, output).
+// solver warm starts begin afresh at the resume point (docs/scenarios.md, output). A
+// checkpoint written while the packing settles also holds where the settling stands.
 #pragma once
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -28,14 +30,18 @@ nlohmann::json shape_saved_json(const Shape& s);
 Shape::Ptr shape_from_saved_config(const Config& sc, int dimension);
 
 // `run_info`: the run pipeline's own figures, stored as "run" (omitted when empty).
+// `settling`: written while the packing settles (before the loading began), where the
+// settling stands ("settling"; absent once the loading runs).
 nlohmann::json checkpoint_json(Simulation& sim, const std::string& scenario_name,
-                               const nlohmann::json& run_info = nlohmann::json::object());
+                               const nlohmann::json& run_info = nlohmann::json::object(),
+                               const SettleProgress* settling = nullptr);
 
 struct Checkpoint {
   SimulationState state;
   std::vector<Grain> grains;
   nlohmann::json engine_state;  // null when the engine saved none
   nlohmann::json run_info = nlohmann::json::object();  // checkpoint_json's run_info
+  std::optional<SettleProgress> settling;  // a checkpoint of the settling, not of the loading
 };
 // Restores the engine part of a checkpoint into an engine holding its grains; errors name
 // `path`/engine_state (ConfigError). Does nothing for a checkpoint without one.

@@ -134,7 +134,8 @@ class CompressionRecorder : public Observer {
 
 // Figures `crumble compare` tabulates, in summary.json: the void ratio at each reported
 // stress or strain level (output.psd_at_stress / psd_at_strain: interpolated between the two
-// series samples around the first crossing, core/Measures.h value_at_level; read from the
+// series samples around the first crossing, core/Measures.h value_at_level, of the stress
+// core/Loading.h level_stress counts; absent for a level not reached; read from the
 // finished series.csv so a resumed run covers its whole history), and d50 and the fines fraction of the final size distribution by mass.
 class ReportRecorder : public Observer {
  public:
@@ -143,9 +144,11 @@ class ReportRecorder : public Observer {
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
     const auto rows = read_csv(dir_ + "/series.csv");
     std::vector<double> stress, strain, voids;
+    const std::string& mode = sim.loading().settings().mode;
     for (std::size_t i = 1; i < rows.size(); ++i) {
       if (rows[i].size() < 8) continue;
-      stress.push_back(std::atof(rows[i][3].c_str()));
+      // Columns: platen_stress_Pa 3, target_stress_Pa 4 (core/Loading.h level_stress).
+      stress.push_back(level_stress(mode, std::atof(rows[i][3].c_str()), std::atof(rows[i][4].c_str())));
       strain.push_back(std::atof(rows[i][5].c_str()));
       voids.push_back(std::atof(rows[i][6].c_str()));
     }

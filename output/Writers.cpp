@@ -338,7 +338,8 @@ void PsdWriter::write() const {
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
   bool wrote = false;
-  for (; next_ < levels_.size() && s.platen_stress >= levels_[next_]; ++next_, wrote = true)
+  const double reached = level_stress(sim.loading().settings().mode, s.platen_stress, s.target_stress);
+  for (; next_ < levels_.size() && reached >= levels_[next_]; ++next_, wrote = true)
     table(sim, s, "level_" + fmt_num(levels_[next_]));
   for (; next_strain_ < strains_.size() && s.axial_strain >= strains_[next_strain_]; ++next_strain_, wrote = true)
     table(sim, s, "strain_" + fmt_num(strains_[next_strain_]));
@@ -347,11 +348,19 @@ void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
 
 void PsdWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
   // A level the stress never reached (a ramp to loading.max_stress ends a hair below it, or
-  // the run stopped early) still gets its table, from the final state, and says so.
+  // the run stopped early) still gets its table, from the final state, and its label says so
+  // and names the stress (strain) of that state.
+  // (Ten digits, as the table's columns: a ramp ending a hair below its level reads
+  // 4999999.995, not 5e+06.)
+  auto reached = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return std::string(buf);
+  };
   for (; next_ < levels_.size(); ++next_)
-    table(sim, s, "level_" + fmt_num(levels_[next_]) + "_not_reached_final_state");
+    table(sim, s, "level_" + fmt_num(levels_[next_]) + "_not_reached_final_at_" + reached(s.platen_stress) + "_Pa");
   for (; next_strain_ < strains_.size(); ++next_strain_)
-    table(sim, s, "strain_" + fmt_num(strains_[next_strain_]) + "_not_reached_final_state");
+    table(sim, s, "strain_" + fmt_num(strains_[next_strain_]) + "_not_reached_final_at_" + reached(s.axial_strain));
   table(sim, s, "final");
   write();
 }

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include <unistd.h>
 
 #include "base/BuildCounters.h"
+#include "base/Format.h"
 #include "output/Checkpoint.h"
 #include "output/Plots.h"
 #include "run/Progress.h"
@@ -175,13 +177,41 @@ Json resume_changes(const Json& before, const Json& effective) {
   return changes;
 }
 
+// How often the scenario checkpoints, as "every N steps and every S s of wall time".
+std::string checkpoint_schedule(const OutputSettings& o) {
+  std::string s;
+  if (o.checkpoint_every > 0) s = std::to_string(o.checkpoint_every) + " steps";
+  if (o.checkpoint_every_s > 0) s += (s.empty() ? "" : " and every ") + fmt_num(o.checkpoint_every_s) + " s of wall time";
+  return "every " + s;
+}
+
+// Why --resume finds no checkpoint.json in `out`, and what to do: no run there, a scenario
+// that writes none, or a run stopped (killed) before its first one, while its packing settled
+// or while it was loaded.
+std::string no_checkpoint_message(const std::string& out, const Scenario& sc) {
+  const fs::path dir(out);
+  const std::string head = "--out " + out + " --resume: no checkpoint.json to resume from: ";
+  const std::string again = "; start the run again (with --force to reuse this folder)";
+  if (!fs::exists(dir / "effective_scenario.json"))
+    return head + "the folder holds no run (no effective_scenario.json either)";
+  const OutputSettings& o = sc.output;
+  if (o.checkpoint_every <= 0 && o.checkpoint_every_s <= 0)
+    return head + "the run writes none (output.checkpoint_every and output.checkpoint_every_s are 0)" + again +
+           " with output.checkpoint_every or output.checkpoint_every_s > 0 to make it resumable";
+  const std::string sooner = ", or with a smaller output.checkpoint_every or output.checkpoint_every_s to checkpoint sooner";
+  if (!fs::exists(dir / "packing.json") && sc.packing.settle)
+    return head + "the run in this folder stopped while its packing settled, before the settling's first checkpoint (" +
+           checkpoint_schedule(o) + " of settling); nothing of it was saved" + again + sooner;
+  return head + "the run in this folder stopped before its first checkpoint (" + checkpoint_schedule(o) +
+         " of loading); nothing after its packing was saved" + again + sooner;
+}
+
 // Refuses a resume whose effective scenario differs from the run's but for kResumeMayDiffer;
 // returns the allowed changes (resume_changes).
-Json check_resumable(const std::string& out, const Json& effective) {
+Json check_resumable(const std::string& out, const Scenario& sc) {
+  const Json& effective = sc.effective;
   const fs::path dir(out);
-  if (!fs::exists(dir / "checkpoint.json"))
-    throw InputError("--out " + out + " --resume: no checkpoint.json to resume from (a run writes one when "
-                     "output.checkpoint_every or output.checkpoint_every_s is > 0)");
+  if (!fs::exists(dir / "checkpoint.json")) throw InputError(no_checkpoint_message(out, sc));
   std::ifstream in(dir / "effective_scenario.json");
   if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
   std::stringstream ss;
@@ -265,6 +295,8 @@ struct RunStart {
   double settle_before = -1;
   long settle_steps = 0, resumed_step = -1;
   bool packing_settled = true;
+  bool loading_resumed = false;  // --resume from a checkpoint of the loading (not of the settling)
+  long resumed_settle_step = -1;  // --resume from a checkpoint of the settling: its step
   Json run_info = Json::object();
 };
 
@@ -283,7 +315,7 @@ void prepare_out(const RunRequest& req, const Scenario& sc, RunStart& st) {
   if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
   if (req.resume && req.packing_only) throw InputError("--resume: a packing stage has nothing to resume");
   if (req.resume) {
-    st.changed_on_resume = check_resumable(out, sc.effective);
+    st.changed_on_resume = check_resumable(out, sc);
     st.settle_before = previous_settle_steps(out);
     // From here on the run goes on with these settings: effective_scenario.json says so, and
     // summary.json's resume_changes keeps what they were before.
@@ -300,40 +332,47 @@ void prepare_out(const RunRequest& req, const Scenario& sc, RunStart& st) {
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
 }
 
-// Continue from DIR/checkpoint.json: the same scenario, its grains and loop state.
-void resume_run(const RunRequest& req, Scenario& sc, RunStart& st) {
-  const std::string& out = req.out;
-  Simulation& sim = *sc.sim;
-  Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
-  Container c = sc.packing.container;
-  c.height = cp.state.platen_position;
-  sim.set_container(c);
-  st.resumed_step = cp.state.step;
-  sim.resume(cp.state, std::move(cp.grains));
-  restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
-  // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
-  st.run_info = cp.run_info;
-  if (st.run_info.contains("packing_settle_steps") && st.run_info["packing_settle_steps"].is_number())
-    st.settle_before = st.run_info["packing_settle_steps"].get<double>();
-  if (!req.quiet)
-    std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
-              << sim.grains().size() << " grains)\n";
+// Checkpoints while the packing settles, by the loading's measures: every
+// output.checkpoint_every settling steps and every output.checkpoint_every_s seconds of wall
+// time, and once more when a signal stops the settling. None for --packing-only (a packing
+// stage is not resumed).
+SettleControl settle_control(const RunRequest& req, Scenario& sc) {
+  SettleControl ctl;
+  ctl.stop = &g_stop;
+  const OutputSettings& o = sc.output;
+  if (req.packing_only || (o.checkpoint_every <= 0 && o.checkpoint_every_s <= 0)) return ctl;
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  ctl.after_step = [&sc, out = req.out, last](const SettleProgress& p, bool stopping) {
+    const OutputSettings& o = sc.output;
+    const bool by_steps = o.checkpoint_every > 0 && p.steps % o.checkpoint_every == 0;
+    const bool by_time = o.checkpoint_every_s > 0 && seconds_since(*last) >= o.checkpoint_every_s;
+    if (!stopping && !by_steps && !by_time) return;
+    write_file_atomic(out + "/checkpoint.json", checkpoint_json(*sc.sim, sc.name, Json::object(), &p).dump() + "\n");
+    *last = std::chrono::steady_clock::now();
+  };
+  return ctl;
 }
 
-// A fresh run: effective_scenario.json, the packing settled and written. False when a
-// signal interrupted the settling (then nothing of the packing is written).
-bool settle_packing(const RunRequest& req, Scenario& sc, RunStart& st) {
+// The packing settled (from `from`, a checkpoint's progress, when given) and written. False
+// when a signal interrupted the settling.
+bool settle_and_write(const RunRequest& req, Scenario& sc, RunStart& st, const std::optional<SettleProgress>& from) {
   const std::string& out = req.out;
   Simulation& sim = *sc.sim;
-  write_file_atomic(out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
-  if (!req.quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
-  const SettleResult settled = build_packing(sim, sc.packing, &g_stop);
+  SettleControl ctl = settle_control(req, sc);
+  ctl.from = from;
+  const SettleResult settled = settle_packing(sim, sc.packing, ctl);
   st.settle_steps = settled.steps;
   if (settled.interrupted) {
-    // An unsettled packing is not the start of this run: nothing is written that a
-    // later --resume or another scenario could take for it.
-    std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
-              << " steps); no packing.json or checkpoint was written: start the run again (with --force to reuse this folder)\n";
+    // An unsettled packing is not the start of this run: no packing.json that another
+    // scenario could take for it; a checkpoint of the settling when the scenario writes them.
+    if (ctl.after_step)
+      std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
+                << " steps); checkpoint written: continue the settling with --resume\n";
+    else
+      std::cerr << "crumble: interrupted while the packing settled (after " << settled.steps
+                << " steps); no packing.json or checkpoint was written"
+                << (req.packing_only ? "" : " (output.checkpoint_every and output.checkpoint_every_s are 0)")
+                << ": start the run again (with --force to reuse this folder)\n";
     return false;
   }
   if (!settled.converged)
@@ -343,6 +382,69 @@ bool settle_packing(const RunRequest& req, Scenario& sc, RunStart& st) {
   write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
   if (!req.quiet && st.settle_steps > 0) std::cerr << "crumble: packing settled in " << st.settle_steps << " steps\n";
   return true;
+}
+
+// The grains of a checkpoint of the settling are the packing's own (grain i has id i): they
+// take the packing's shapes back, so that packing.json gives their specs as a fresh run's
+// does. A grain whose saved shape is not its packing grain's is refused.
+void take_packing_shapes(std::vector<Grain>& grains, const PackingSpec& spec, const std::string& path) {
+  for (std::size_t k = 0; k < grains.size(); ++k) {
+    Grain& g = grains[k];
+    const auto i = static_cast<std::size_t>(g.id);
+    const Shape::Ptr& own = i < spec.grains.size() ? spec.grains[i].shape : nullptr;
+    if (!own || own->kind() != g.shape->kind() || own->volume() != g.shape->volume())
+      throw ConfigError(path, "/grains/" + std::to_string(k),
+                        "grain " + std::to_string(g.id) + " is not a grain of the scenario's packing (a checkpoint of "
+                        "the settling holds the packing's grains)");
+    g.shape = own;
+  }
+}
+
+// Continue from DIR/checkpoint.json: the same scenario, its grains and loop state; a
+// checkpoint of the settling goes on settling (false when a signal interrupts it again).
+bool resume_run(const RunRequest& req, Scenario& sc, RunStart& st) {
+  const std::string& out = req.out;
+  Simulation& sim = *sc.sim;
+  Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
+  // An engine that saves its state gets the container as it was and its platen from the
+  // state; the others are rebuilt with the platen at rest where it was.
+  Container c = sc.packing.container;
+  if (!cp.settling || cp.engine_state.is_null()) c.height = cp.state.platen_position;
+  if (cp.settling) {
+    PackingSpec spec = sc.packing;
+    spec.container = c;
+    place_packing(sim, spec, false);
+    take_packing_shapes(cp.grains, sc.packing, out + "/checkpoint.json");
+    sim.restore_packing(cp.state, std::move(cp.grains));
+    restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
+    st.resumed_settle_step = cp.settling->steps;
+    if (!req.quiet)
+      std::cerr << "crumble: resuming the packing's settling at step " << cp.settling->steps << " ("
+                << sim.grains().size() << " grains)\n";
+    return settle_and_write(req, sc, st, cp.settling);
+  }
+  sim.set_container(c);
+  st.resumed_step = cp.state.step;
+  st.loading_resumed = true;
+  sim.resume(cp.state, std::move(cp.grains));
+  restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
+  // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
+  st.run_info = cp.run_info;
+  if (st.run_info.contains("packing_settle_steps") && st.run_info["packing_settle_steps"].is_number())
+    st.settle_before = st.run_info["packing_settle_steps"].get<double>();
+  if (!req.quiet)
+    std::cerr << "crumble: resuming at step " << cp.state.step << " (t = " << cp.state.time << " s, "
+              << sim.grains().size() << " grains)\n";
+  return true;
+}
+
+// A fresh run: effective_scenario.json, the packing placed, settled and written. False when
+// a signal interrupted the settling.
+bool build_and_settle(const RunRequest& req, Scenario& sc, RunStart& st) {
+  write_file_atomic(req.out + "/effective_scenario.json", sc.effective.dump(2) + "\n");
+  if (!req.quiet) std::cerr << "crumble: building packing (" << sc.packing.grains.size() << " grains)\n";
+  place_packing(*sc.sim, sc.packing);
+  return settle_and_write(req, sc, st, std::nullopt);
 }
 
 // --packing-only: summary.json of the packing stage.
@@ -383,8 +485,8 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
     std::cerr << "crumble: " << format_progress(s, f, el, eta.eta_s()) << "\n";
   };
   RunSummary sum = sim.run(progress);
-  // A resumed run settled nothing: report the settling of the run it continues.
-  if (!req.resume) {
+  // A run resumed in its loading settled nothing: report the settling of the run it continues.
+  if (!st.loading_resumed) {
     sum.extra["packing_settle_steps"] = static_cast<double>(st.settle_steps);
     sum.extra["packing_settled"] = st.packing_settled ? 1.0 : 0.0;
   } else if (st.settle_before >= 0) {
@@ -392,7 +494,8 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
     if (st.run_info.contains("packing_settled") && st.run_info["packing_settled"].is_boolean())
       sum.extra["packing_settled"] = st.run_info["packing_settled"].get<bool>() ? 1.0 : 0.0;
   }
-  if (req.resume) sum.extra["resumed_from_step"] = static_cast<double>(st.resumed_step);
+  if (st.loading_resumed) sum.extra["resumed_from_step"] = static_cast<double>(st.resumed_step);
+  if (st.resumed_settle_step >= 0) sum.extra["resumed_from_settle_step"] = static_cast<double>(st.resumed_settle_step);
   return sum;
 }
 
@@ -440,9 +543,7 @@ RunResult execute(const RunRequest& req) {
   // Ctrl-C / SIGTERM: finish the current step, then write every output and the checkpoint.
   install_stop_signals();
   const auto t0 = std::chrono::steady_clock::now();
-  if (req.resume) {
-    resume_run(req, sc, st);
-  } else if (!settle_packing(req, sc, st)) {
+  if (!(req.resume ? resume_run(req, sc, st) : build_and_settle(req, sc, st))) {
     res.status = interrupted_status();
     res.reason = "interrupted while the packing settled";
     return res;
@@ -457,7 +558,8 @@ RunResult execute(const RunRequest& req) {
       std::cerr << "crumble: packing of " << sc.sim->grains().size() << " grains in " << out << "/packing.json\n";
     return res;
   }
-  if (!req.resume) st.run_info = {{"packing_settle_steps", st.settle_steps}, {"packing_settled", st.packing_settled}};
+  if (!st.loading_resumed)
+    st.run_info = {{"packing_settle_steps", st.settle_steps}, {"packing_settled", st.packing_settled}};
   RunSummary sum = run_loading(req, sc, st);
   sum.wall_seconds = seconds_since(t0);
   const RepresentationCounts built = representations_built() - built_before;

@@ -307,10 +307,11 @@ PackingSpec packing_from_config(const Config& pc, const Config& cc, int dim, Rng
   return spec;
 }
 
-SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
+void place_packing(Simulation& sim, const PackingSpec& spec, bool add_grains) {
   sim.set_container(spec.container);
   for (const auto& w : spec.walls) sim.add_moving_wall(w);
   if (spec.feed.count > 0) sim.set_feed(spec.feed);
+  if (!add_grains) return;
   for (const auto& pg : spec.grains) {
     Grain g;
     g.shape = pg.shape;
@@ -319,52 +320,73 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
     g.material = pg.material;
     sim.add_grain(std::move(g));
   }
+}
+
+namespace {
+
+// The settling's time step and convergence scale, computed once when it begins.
+SettleProgress settle_start(Simulation& sim, const SettleSettings& ss) {
+  SettleProgress p;
+  Engine& e = sim.engine();
+  p.dt = std::min(ss.dt > 0 ? ss.dt : sim.settings().time_steps.front().dt, e.max_stable_dt());
+  for (const auto& g : sim.grains()) p.mean_diameter += g.shape->equivalent_diameter();
+  p.mean_diameter /= static_cast<double>(std::max<std::size_t>(1, sim.grains().size()));
+  p.last_platen = e.platen_position();
+  return p;
+}
+
+}  // namespace
+
+SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const SettleControl& ctl) {
   SettleResult res;
   if (!spec.settle) return res;
   // Zhu & Zhao 2019 §5: push the cloud down with a plate under a small force until stable.
   Engine& e = sim.engine();
   const auto& ss = spec.settle_settings;
   const double area = sim.context().dimension == 2 ? spec.container.lx : spec.container.lx * spec.container.ly;
-  double dt = ss.dt > 0 ? ss.dt : sim.settings().time_steps.front().dt;
-  dt = std::min(dt, e.max_stable_dt());
-  double dmean = 0;
-  for (const auto& g : sim.grains()) dmean += g.shape->equivalent_diameter();
-  dmean /= std::max<std::size_t>(1, sim.grains().size());
-  double last = e.platen_position();
-  long steps = 0;
-  const long window = std::max(1L, std::lround(ss.window / dt));
-  const long max_steps = std::max(window, std::lround(ss.max_time / dt));
+  SettleProgress p = ctl.from ? *ctl.from : settle_start(sim, ss);
+  const long window = std::max(1L, std::lround(ss.window / p.dt));
+  const long max_steps = std::max(window, std::lround(ss.max_time / p.dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
   if (!e.set_friction_scale(ss.friction_scale))
     throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
                                                             "' cannot change friction while settling; use 1");
   const long guard_every = std::max(1L, sim.settings().sample_every);
   res.converged = false;
-  while (steps < max_steps) {
-    if (stop && stop->load()) {
+  while (p.steps < max_steps) {
+    if (ctl.stop && ctl.stop->load()) {
       res.interrupted = true;
+      if (ctl.after_step) ctl.after_step(p, true);
       break;
     }
     const double z0 = e.platen_position();
-    e.step(dt);
-    ++steps;
+    e.step(p.dt);
+    ++p.steps;
     sim.account_platen_work(e.platen_force(), e.platen_position() - z0);
-    sim.check_guards("settling", dt, steps % guard_every == 0);
-    if (steps % window == 0) {
+    sim.check_guards("settling", p.dt, p.steps % guard_every == 0);
+    if (p.steps % window == 0) {
       const double z = e.platen_position();
       const bool loaded = e.platen_force() > 0.5 * ss.stress * area;
-      if (loaded && std::abs(last - z) < ss.tolerance * dmean) {
+      if (loaded && std::abs(p.last_platen - z) < ss.tolerance * p.mean_diameter) {
         res.converged = true;
         break;
       }
-      last = z;
+      p.last_platen = z;
     }
+    if (ctl.after_step) ctl.after_step(p, false);
   }
-  res.steps = steps;
+  res.steps = p.steps;
   e.set_friction_scale(1.0);
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
   return res;
+}
+
+SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop) {
+  place_packing(sim, spec);
+  SettleControl ctl;
+  ctl.stop = stop;
+  return settle_packing(sim, spec, ctl);
 }
 
 Json packing_to_json(const Simulation& sim, const PackingSpec& spec) {

@@ -3,7 +3,9 @@
 // earlier run, so different engines and models start from the identical packing.
 #pragma once
 #include <atomic>
+#include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,9 +64,26 @@ struct SettleResult {
   bool converged = true;     // false: settle.max_time ran out before the platen came to rest
 };
 
-// Adds the grains to the simulation and, for generated clouds, pushes the platen down until
-// the packing is stable (the initial state of the run). `stop` (a signal flag) ends the
-// settling early; the result says so, and such a packing is not a valid start of a run.
+// What the run pipeline adds to a settling: a stop flag (a signal), where to go on from
+// (a checkpoint's progress; the grains are already in the simulation), and a call after
+// every step, and once more when `stop` ends the settling (`stopping` true), with the engine
+// as the next step would find it (checkpoints).
+struct SettleControl {
+  const std::atomic<bool>* stop = nullptr;
+  std::optional<SettleProgress> from;
+  std::function<void(const SettleProgress&, bool stopping)> after_step;
+};
+
+// The container, the moving walls, the feed and (`add_grains`) the grains of the packing
+// put into the simulation.
+void place_packing(Simulation& sim, const PackingSpec& spec, bool add_grains = true);
+
+// For generated clouds: pushes the platen down until the packing is stable (the initial
+// state of the run). `ctl.stop` ends the settling early; the result says so, and such a
+// packing is not a valid start of a run (a checkpoint of it is: SettleControl).
+SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const SettleControl& ctl = {});
+
+// place_packing, then settle_packing.
 SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::atomic<bool>* stop = nullptr);
 
 // packing.json of the current grains (shape specs, poses) for reuse by another scenario.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -19,6 +20,9 @@ namespace crumble {
 using Json = nlohmann::json;
 
 Json load_scenario_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw ConfigError(path, "is a folder, not a scenario file: give a JSON file (e.g. scenarios/oedometer_rigid_quick.json)");
   std::ifstream in(path);
   if (!in) throw ConfigError(path, "cannot open scenario file");
   std::stringstream ss;

@@ -675,9 +675,12 @@ def plot_compare(F, d, title):
                     color="0.5", ls=":", lw=1.5, label="initial")
         for i, (label, rows) in enumerate(finals.items()):
             rows = sorted(rows, key=lambda r: r["sieve_diameter_m"])
+            # The stress each run ended at: runs stopped early are not shown as at the full load.
+            s = rows[0].get("platen_stress_Pa", math.nan) if rows else math.nan
+            at = f" ({s / 1e6:.3g} MPa)" if math.isfinite(s) else ""
             ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
                     color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], marker="o", ms=3, lw=1.5,
-                    label=f"{label}, final")
+                    label=f"{label}, final{at}")
         plain_log_axis(ax)
         ax.set_xlabel("sieve diameter (mm, log scale)")
         ax.set_ylabel("passing by mass (%)")

@@ -21,7 +21,7 @@ class CompareCommand : public Subcommand {
     c->add_option("--vary", req_.vary, "path=value1,value2,... (repeatable; e.g. engine.type=bullet,lsdem,ode)")
         ->required();
     c->add_option("--set", req_.sets, "fix a scenario value for every combination: path=value");
-    c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)");
+    c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", req_.threads, "threads of each run (overrides the scenario's)")
         ->check(CLI::Range(1, 1024));
     c->add_option("--jobs", req_.jobs, "combinations run at the same time (each a process; default 1)")
@@ -65,7 +65,7 @@ class SweepCommand : public Subcommand {
     c->add_option("--metric", req_.metrics,
                   "metric to compare (repeatable; default: every one the reference run reports), e.g. crushing_force");
     c->add_option("--set", req_.sets, "fix a scenario value for every setting: path=value");
-    c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)");
+    c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", req_.threads, "threads of each run (overrides the scenario's)")
         ->check(CLI::Range(1, 1024));
     jobs_ = c->add_option("--jobs", req_.jobs, "settings run at the same time (each a process; default 1)")

@@ -17,7 +17,7 @@ class RunCommand : public Subcommand {
     c->add_option("scenario", file_, "scenario JSON file")->required();
     c->add_option("--out", out_, "output directory")->required();
     c->add_option("--set", sets_, "override a scenario value: path=value (e.g. engine.type=lsdem)");
-    c->add_option("--seed", seed_, "random seed (overrides the scenario's)");
+    c->add_option("--seed", seed_, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", threads_,
                   "threads (overrides the scenario's); a warning when more than the idle CPUs "
                   "(docs/performance.md, \"Threads on a busy machine\")")
@@ -25,9 +25,9 @@ class RunCommand : public Subcommand {
     c->add_flag("--quiet", quiet_,
                 "no progress on stderr (otherwise a line with an ETA every 2 s on a terminal, every 60 s in a log)");
     c->add_flag("--resume", resume_,
-                "continue from DIR/checkpoint.json (written every output.checkpoint_every_s, default " +
+                "continue from DIR/checkpoint.json (written while the packing settles and while it is loaded, every output.checkpoint_every_s, default " +
                     option_default_text(find_option(output_options(), "checkpoint_every_s")) +
-                    ", and every output.checkpoint_every steps), also after SIGKILL; the effective scenario must "
+                    ", and every output.checkpoint_every steps of either), also after SIGKILL; the effective scenario must "
                     "equal DIR/effective_scenario.json but for threads, simulation.max_steps and "
                     "output.checkpoint_every_s");
     c->add_flag("--force", force_,

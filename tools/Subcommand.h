@@ -33,6 +33,18 @@ class Subcommand {
   virtual int run(const CommandContext& ctx) = 0;
 };
 
+// --seed: a number in [0, 2^64 - 1]. CLI11 reads "-1" into an unsigned integer as 2^64 - 1;
+// this check refuses a sign (and anything but digits) before it does.
+inline CLI::Validator seed_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos)
+          return s + ": expected a whole number from 0 to 18446744073709551615";
+        return "";
+      },
+      "UINT", "seed");
+}
+
 // Exit statuses, shared by the footers of the subcommands.
 extern const char* const kExitStatus;
 

@@ -63,6 +63,26 @@ TEST(Cli, MalformedJson) {
 
 TEST(Cli, MissingFile) { expect_input_error("validate /nonexistent/x.json", "cannot open"); }
 
+// A folder given as the scenario is named as a folder (reading it once gave "malformed JSON …
+// unexpected end of input").
+TEST(Cli, FolderAsScenarioSaysItIsAFolder) {
+  const std::string dir = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios";
+  expect_input_error("validate " + dir, "is a folder, not a scenario file");
+  const Result r = run("run " + dir + " --out " + (fs::temp_directory_path() / "crumble_cli_test" / "folder").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output.find("malformed JSON"), std::string::npos) << r.output;
+}
+
+// --seed takes 0 … 2^64 - 1; a negative seed is refused (it once wrapped to 2^64 - 1 silently).
+TEST(Cli, NegativeSeedIsRefused) {
+  const std::string f = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "negative_seed";
+  fs::remove_all(out);
+  expect_input_error("run " + f + " --seed -1 --out " + out.string(), "-1: expected a whole number from 0 to");
+  EXPECT_FALSE(fs::exists(out));
+  expect_input_error("compare " + f + " --seed -5 --out " + out.string() + " --vary engine.type=lsdem", "-5: expected");
+}
+
 TEST(Cli, UnknownKeyNamesPath) {
   const std::string f = scenario_file("good.json", kGood);
   expect_input_error("validate " + f + " --set loading.strain_rte=2", "/loading/strain_rte");
@@ -278,7 +298,7 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   EXPECT_EQ(sb["resume_changes"], nlohmann::json::parse(R"([{"path": "/simulation/max_steps", "was": 125, "now": 0}])"));
   // Resuming a scenario that never wrote a checkpoint is an input error.
   expect_input_error("run " + scen + " --out " + (base / "nothing_here").string() + sets + " --resume",
-                     "output.checkpoint_every");
+                     "the folder holds no run");
 }
 
 TEST(Cli, SignalStopsTheRunWithEveryOutput) {
@@ -286,20 +306,21 @@ TEST(Cli, SignalStopsTheRunWithEveryOutput) {
   // checkpoint to resume.
   const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "interrupted";
   fs::remove_all(out);
-  // The signal is sent once the first checkpoint exists (the loading has begun), however
-  // slowly a loaded machine settles the packing.
+  // The signal is sent once packing.json exists (the loading has begun), however slowly a
+  // loaded machine settles the packing (the settling writes checkpoints of its own).
   const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + CRUMBLE_SOURCE_DIR +
                           "/scenarios/oedometer_rigid_quick.json --quiet --out " + out.string() +
                           " --set loading.ramp_time=100 --set output.checkpoint_every=20 --set packing.count=30"
                           " --set container.lx=6e-3 --set container.ly=6e-3 --set engine.solver_iterations=200";
   const Result r = run("--version >/dev/null; " + cmd + " 2>&1 & p=$!; for i in $(seq 1 1500); do [ -f " +
-                       (out / "checkpoint.json").string() + " ] && break; sleep 0.2; done; kill -TERM $p; wait $p; echo status=$?");
+                       (out / "packing.json").string() + " ] && break; sleep 0.2; done; kill -TERM $p; wait $p; echo status=$?");
   ASSERT_NE(r.output.find("status=143"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("interrupted at step"), std::string::npos) << r.output;
   const auto s = nlohmann::json::parse(slurp(out / "summary.json"));
   EXPECT_EQ(s["interrupted"], true);
   EXPECT_TRUE(fs::exists(out / "series.csv"));
-  EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
+  ASSERT_TRUE(fs::exists(out / "checkpoint.json"));
+  EXPECT_FALSE(nlohmann::json::parse(slurp(out / "checkpoint.json")).contains("settling"));
 }
 
 // More threads than CPUs: the run says so on stderr, even with --quiet, and still runs

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "tests/support/CliRunner.h"
 
 namespace fs = std::filesystem;
@@ -85,14 +87,42 @@ TEST(GuardsCli, HealthyRunReportsItsMargins) {
   expect_positive_void_ratios(out);
 }
 
-TEST(GuardsCli, InterruptedSettlingLeavesNothingToResume) {
-  // SIGTERM while the packing settles: no packing.json or checkpoint of an unsettled packing,
-  // an exit status that is not 0, and --resume refuses.
+TEST(GuardsCli, InterruptedSettlingIsCheckpointedAndResumed) {
+  // SIGTERM while the packing settles: no packing.json of an unsettled packing, an exit
+  // status that is not 0, and a checkpoint of the settling that --resume settles on from
+  // (interrupted again here: the settling's tolerance is never met).
   const fs::path out = out_dir();
   const std::string sets = " --set packing.count=30 --set container.lx=6e-3 --set container.ly=6e-3"
                            " --set packing.settle.tolerance=1e-12 --set packing.settle.max_time=100"
                            " --set output.checkpoint_every=10 --set engine.solver_iterations=50";
-  const auto r = run_cli("--version >/dev/null; timeout -s TERM 3 " + std::string(CRUMBLE_BINARY) + " run " +
+  const std::string run = "--version >/dev/null; timeout -s TERM 3 " + std::string(CRUMBLE_BINARY) + " run " +
+                          scen("oedometer_rigid_quick.json") + sets + " --quiet --out " + out.string();
+  const auto r = run_cli(run + " 2>&1; echo status=$?");
+  EXPECT_NE(r.output.find("interrupted while the packing settled"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("continue the settling with --resume"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("status=0"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "packing.json"));
+  ASSERT_TRUE(fs::exists(out / "checkpoint.json"));
+  const auto first = nlohmann::json::parse(slurp(out / "checkpoint.json"));
+  ASSERT_TRUE(first.contains("settling")) << "not a checkpoint of the settling";
+  const long at = first["settling"]["steps"].get<long>();
+  EXPECT_GT(at, 0);
+  const auto again = run_cli(run + " --resume 2>&1; echo status=$?");
+  EXPECT_NE(again.output.find("interrupted while the packing settled"), std::string::npos) << again.output;
+  const auto second = nlohmann::json::parse(slurp(out / "checkpoint.json"));
+  ASSERT_TRUE(second.contains("settling"));
+  EXPECT_GT(second["settling"]["steps"].get<long>(), at) << "the resumed settling did not go on from its checkpoint";
+}
+
+TEST(GuardsCli, InterruptedSettlingWithoutCheckpointsLeavesNothingToResume) {
+  // Checkpoints off: SIGTERM while the packing settles leaves neither packing.json nor a
+  // checkpoint, and --resume refuses, saying the run writes none.
+  const fs::path out = out_dir();
+  const std::string sets = " --set packing.count=30 --set container.lx=6e-3 --set container.ly=6e-3"
+                           " --set packing.settle.tolerance=1e-12 --set packing.settle.max_time=100"
+                           " --set output.checkpoint_every=0 --set output.checkpoint_every_s=0"
+                           " --set engine.solver_iterations=50";
+  const auto r = run_cli("--version >/dev/null; timeout -s TERM 2 " + std::string(CRUMBLE_BINARY) + " run " +
                          scen("oedometer_rigid_quick.json") + sets + " --quiet --out " + out.string() + " 2>&1; echo status=$?");
   EXPECT_NE(r.output.find("interrupted while the packing settled"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("status=0"), std::string::npos) << r.output;
@@ -100,4 +130,5 @@ TEST(GuardsCli, InterruptedSettlingLeavesNothingToResume) {
   EXPECT_FALSE(fs::exists(out / "checkpoint.json"));
   const auto again = run_cli("run " + scen("oedometer_rigid_quick.json") + sets + " --quiet --resume --out " + out.string());
   EXPECT_EQ(again.status, 2) << again.output;
+  EXPECT_NE(again.output.find("the run writes none"), std::string::npos) << again.output;
 }

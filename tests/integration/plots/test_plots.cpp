@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -191,4 +193,54 @@ TEST(Plots, SweepFolderGetsTheErrorCostFront) {
       EXPECT_FALSE(fs::exists(e.path() / "psd.png")) << e.path();
     }
   }
+}
+
+// A level the loading did not reach is never shown as reached. lsdem's measured stress rings
+// above the ramp: in this 2D run (sampled every 10 steps, stopped at step 700 while the ramp
+// commands 280 kPa) it passes 300 kPa from step 640 on. The 300 kPa table is then the final
+// state, and psd.csv, summary.json and the psd.png legend name the stress it shows.
+TEST(Plots, ALevelNotReachedIsLabelledWithTheStressReached) {
+  const fs::path d = fresh_dir("not_reached");
+  const auto r = run_cli("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json --quiet --out " +
+                         d.string() + " --set output.plots=false --set simulation.sample_every=10"
+                         " --set simulation.max_steps=700 --set output.psd_at_stress=[3e5]");
+  ASSERT_EQ(r.status, 0) << r.output;
+  // The case: a measured sample above the level, the commanded stress always below it.
+  bool measured_above = false;
+  {
+    std::istringstream in(slurp(d / "series.csv"));
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::vector<std::string> c;
+      std::istringstream ls(line);
+      for (std::string x; std::getline(ls, x, ',');) c.push_back(x);
+      ASSERT_GE(c.size(), 5u);
+      measured_above |= std::stod(c[3]) >= 3e5;
+      ASSERT_LT(std::stod(c[4]), 3e5) << line;
+    }
+  }
+  ASSERT_TRUE(measured_above) << "the measured stress no longer passes the level: the test needs another case";
+  // psd.csv: no table labelled as the level reached; the one standing for it names the final stress.
+  const std::string psd = slurp(d / "psd.csv");
+  EXPECT_EQ(psd.find("\nlevel_300000,"), std::string::npos) << psd;
+  std::string final_stress;
+  {
+    const auto at = psd.find("\nfinal,");
+    ASSERT_NE(at, std::string::npos);
+    final_stress = psd.substr(at + 7, psd.find(',', at + 7) - at - 7);
+  }
+  char label[96];
+  std::snprintf(label, sizeof label, "\nlevel_300000_not_reached_final_at_%.10g_Pa,", std::stod(final_stress));
+  EXPECT_NE(psd.find(label), std::string::npos) << label << " not in\n" << psd;
+  // summary.json (compare and sweep tables): no void ratio at a level not reached.
+  EXPECT_EQ(slurp(d / "summary.json").find("void_ratio_at_stress_300000_Pa"), std::string::npos);
+  // The figure's legend (scripts/crumble_plot.py; its labels need no matplotlib).
+  const auto py = run_cli("--version >/dev/null; python3 -c \"import sys; sys.path.insert(0, '" +
+                          std::string(CRUMBLE_SOURCE_DIR) + "/scripts'); import crumble_plot as p; t = p.fold_not_reached("
+                          "p.read_psd('" + (d / "psd.csv").string() + "')); print('|'.join(p.psd_label(k, v) for k, v in t.items()))\"");
+  char legend[96];
+  std::snprintf(legend, sizeof legend, "final (%.3g MPa; 0.3 MPa not reached)", std::stod(final_stress) / 1e6);
+  EXPECT_NE(py.output.find(legend), std::string::npos) << legend << " not in " << py.output;
+  EXPECT_EQ(py.output.find("at 0.3 MPa"), std::string::npos) << py.output;
 }

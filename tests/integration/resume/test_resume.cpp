@@ -47,6 +47,70 @@ crumble::testing_support::CliResult run_and_kill(const std::string& cmd, const f
                  "echo killed");
 }
 
+// Starts `cmd` (a crumble run writing into `out`) in the background and kills it with SIGKILL
+// once out/checkpoint.json is a checkpoint of the settling at settling step >= `kill_step`
+// (the settling may have gone on to its next checkpoint by then).
+crumble::testing_support::CliResult run_and_kill_settling(const std::string& cmd, const fs::path& out, long kill_step) {
+  const std::string cp = (out / "checkpoint.json").string();
+  return run_cli("--version >/dev/null; " + cmd + " >/dev/null 2>&1 & p=$!; for i in $(seq 1 20000); do [ -f " + cp +
+                 " ] && s=$(grep -o '\"settling\":{[^}]*\"steps\":[0-9]*' " + cp +
+                 " | grep -o '[0-9]*$') && [ \"$s\" -ge " + std::to_string(kill_step) +
+                 " ] && break; kill -0 $p 2>/dev/null || break; sleep 0.002; done; kill -KILL $p; wait $p; echo killed");
+}
+
+// The settling step of a checkpoint of the settling, -1 for another checkpoint.
+long settling_step(const fs::path& checkpoint) {
+  const auto cp = nlohmann::json::parse(slurp(checkpoint));
+  return cp.contains("settling") ? cp["settling"]["steps"].get<long>() : -1;
+}
+
+// One settling resume: `scenario` (a file in scenarios/) run with `sets` to its end into
+// NAME/whole; the same run killed with SIGKILL at a settling step drawn from `seed` in
+// [first_kill, settling steps − kill_margin] into NAME/killed, then resumed there. The
+// settling must take more than `min_settle` steps, and the kill must land inside it.
+struct SettlingResume {
+  fs::path whole, killed;
+  nlohmann::json whole_summary, resumed_summary;
+  long resumed_at = -1;  // the settling step of the checkpoint the run resumed from
+};
+
+void kill_while_settling_and_resume(const std::string& name, const std::string& scenario, const std::string& sets,
+                                    long min_settle, long first_kill, long kill_margin, unsigned seed,
+                                    SettlingResume& r) {
+  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / name;
+  r.whole = base / "whole";
+  r.killed = base / "killed";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/" + scenario;
+  const auto a = run_cli("run " + scen + " --out " + r.whole.string() + sets);
+  ASSERT_EQ(a.status, 0) << a.output;
+  r.whole_summary = nlohmann::json::parse(slurp(r.whole / "summary.json"));
+  const long settle = r.whole_summary["packing_settle_steps"].get<long>();
+  ASSERT_GT(settle, min_settle);
+  std::mt19937 rng(seed);
+  const long kill_step = std::uniform_int_distribution<long>(first_kill, settle - kill_margin)(rng);
+  run_and_kill_settling(std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + r.killed.string() + sets, r.killed,
+                        kill_step);
+  ASSERT_TRUE(fs::exists(r.killed / "checkpoint.json")) << "kill step " << kill_step;
+  r.resumed_at = settling_step(r.killed / "checkpoint.json");
+  ASSERT_GE(r.resumed_at, kill_step) << "killed after the settling";
+  ASSERT_FALSE(fs::exists(r.killed / "packing.json")) << "killed after the settling (kill step " << kill_step << ")";
+  const auto b = run_cli("run " + scen + " --out " + r.killed.string() + sets + " --resume");
+  ASSERT_EQ(b.status, 0) << b.output;
+  r.resumed_summary = nlohmann::json::parse(slurp(r.killed / "summary.json"));
+  EXPECT_EQ(r.resumed_summary["resumed_from_settle_step"].get<long>(), r.resumed_at);
+}
+
+// summary.json without its wall times, resume markers and representation counts.
+std::string summary_but_process(const fs::path& file) {
+  auto j = nlohmann::json::parse(slurp(file));
+  for (const char* k : {"wall_seconds", "time_breakdown_s", "resumed_from_step", "resumed_from_settle_step",
+                        "representations_built"})
+    j.erase(k);
+  return j.dump(1);
+}
+
 // Every regular file under `dir`, relative paths.
 std::set<std::string> files_under(const fs::path& dir) {
   std::set<std::string> r;
@@ -343,4 +407,78 @@ TEST(Resume, CutRowsOfAKilledRunAreDropped) {
     EXPECT_EQ(slurp(dir / "events.csv.part"), header + "\n" + whole);
   }
   EXPECT_FALSE(fs::exists(dir / "events.csv"));
+}
+
+// The settling is checkpointed like the loading (output.checkpoint_every settling steps): an
+// lsdem run killed with SIGKILL at a (seeded) random step of its settling and resumed
+// settles on from the checkpoint and writes every file as the uninterrupted run does, byte for
+// byte, but for wall times (the packing, the series, the summary).
+TEST(Resume, LsdemSettlingResumedAfterSigkillIsBitIdentical) {
+  // 80 disks and polygons settling for 20000 steps; a short loading after it.
+  const std::string sets =
+      " --quiet --threads 1 --set simulation.max_steps=300 --set output.checkpoint_every=2000"
+      " --set output.checkpoint_every_s=0 --set output.plots=false";
+  SettlingResume r;
+  kill_while_settling_and_resume("settling_lsdem", "oedometer_rigid_2d_quick.json", sets, 8000, 2000, 4000, 20260521,
+                                 r);
+  if (HasFatalFailure()) return;
+  EXPECT_FALSE(r.resumed_summary.contains("resumed_from_step"));
+  EXPECT_EQ(summary_but_process(r.whole / "summary.json"), summary_but_process(r.killed / "summary.json"));
+  ASSERT_EQ(files_under(r.whole), files_under(r.killed));
+  for (const auto& f : files_under(r.whole)) {
+    if (f == "summary.json" || f == "stages.csv") continue;
+    EXPECT_TRUE(slurp(r.whole / f) == slurp(r.killed / f))
+        << f << " differs (resumed at settling step " << r.resumed_at << ")";
+  }
+}
+
+// Bullet rebuilt from a checkpoint of the settling restarts its contacts and the platen at
+// rest (docs/scenarios.md, output): the packing settles on to a new sample of the same
+// settling, and the run stays within the resume tolerance of the loading's resume (5 % on the
+// final void ratio). Killed at a seeded random step after the first checkpoint.
+TEST(Resume, BulletSettlingResumedAfterSigkillStaysWithinTolerance) {
+  bool bullet = false;
+  for (const auto& e : crumble::engines().entries()) bullet |= e.name == "bullet";
+  if (!bullet) GTEST_SKIP() << "needs the bullet engine";
+  // 40 spheres settling in about 1100 steps, then a ramp to 3 MPa in 250 steps.
+  const std::string sets =
+      " --quiet --threads 1 --set packing.count=40 --set container.lx=5e-3 --set container.ly=5e-3"
+      " --set loading.max_stress=3e6 --set engine.solver_iterations=100 --set output.checkpoint_every=100"
+      " --set output.checkpoint_every_s=0 --set output.plots=false";
+  SettlingResume r;
+  kill_while_settling_and_resume("settling_bullet", "oedometer_rigid_quick.json", sets, 500, 100, 200, 521, r);
+  if (HasFatalFailure()) return;
+  const nlohmann::json &sa = r.whole_summary, &sb = r.resumed_summary;
+  EXPECT_EQ(sb["steps"], sa["steps"]);
+  EXPECT_EQ(sb["packing_settled"], 1.0);
+  const double ea = sa["void_ratio_final"].get<double>(), eb = sb["void_ratio_final"].get<double>();
+  EXPECT_NEAR(eb, ea, 0.05 * ea) << "resumed at settling step " << r.resumed_at;
+  EXPECT_EQ(data_rows(slurp(r.killed / "series.csv")), data_rows(slurp(r.whole / "series.csv")));
+}
+
+// A run killed while its packing settles, before the settling's first checkpoint, leaves
+// nothing to resume: --resume says so and what to do, instead of blaming the settings.
+TEST(Resume, KilledBeforeTheFirstCheckpointSaysSo) {
+  const fs::path out = fs::temp_directory_path() / "crumble_resume_test" / "before_first";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const std::string sets = " --quiet --set output.checkpoint_every=1000000 --set output.checkpoint_every_s=0";
+  const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + out.string() + sets;
+  run_cli("--version >/dev/null; " + cmd + " >/dev/null 2>&1 & p=$!; for i in $(seq 1 5000); do [ -f " +
+          (out / "effective_scenario.json").string() + " ] && break; sleep 0.002; done; kill -KILL $p; wait $p; echo k");
+  ASSERT_FALSE(fs::exists(out / "checkpoint.json"));
+  ASSERT_FALSE(fs::exists(out / "packing.json")) << "the settling ended before the kill";
+  const auto r = run_cli("run " + scen + " --out " + out.string() + sets + " --resume");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("stopped while its packing settled, before the settling's first checkpoint (every 1000000 steps"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--force"), std::string::npos) << r.output;
+  // A folder without a run says that instead.
+  const fs::path empty = out / "empty";
+  fs::create_directories(empty);
+  const auto e = run_cli("run " + scen + " --out " + empty.string() + sets + " --resume");
+  EXPECT_EQ(e.status, 2) << e.output;
+  EXPECT_NE(e.output.find("the folder holds no run"), std::string::npos) << e.output;
 }

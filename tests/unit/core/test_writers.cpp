@@ -117,16 +117,16 @@ TEST(PsdWriter, LevelNotReachedIsWrittenWithTheFinalState) {
   PsdWriter w(f.dir.string(), {1e6, 5e6});
   RunState s;
   w.on_start(*f.sc.sim, s);
-  s.platen_stress = 1.2e6;
+  s.platen_stress = s.target_stress = 1.2e6;
   w.on_sample(*f.sc.sim, s);
   // The ramp ends a hair below loading.max_stress.
-  s.platen_stress = 5e6 * (1 - 1e-9);
+  s.platen_stress = s.target_stress = 5e6 * (1 - 1e-9);
   w.on_sample(*f.sc.sim, s);
   RunSummary sum;
   w.on_finish(*f.sc.sim, s, sum);
   const std::string psd = crumble::testing_support::slurp(f.dir / "psd.csv");
   EXPECT_NE(psd.find("\nlevel_1e+06,1200000,"), std::string::npos) << psd;
-  EXPECT_NE(psd.find("\nlevel_5e+06_not_reached_final_state,4999999.995,"), std::string::npos) << psd;
+  EXPECT_NE(psd.find("\nlevel_5e+06_not_reached_final_at_4999999.995_Pa,4999999.995,"), std::string::npos) << psd;
   EXPECT_NE(psd.find("\nfinal,"), std::string::npos) << psd;
   // Every table has the same 25 sieves: initial, two levels, final.
   EXPECT_EQ(read_csv((f.dir / "psd.csv").string()).size(), 1u + 4 * 25);
@@ -148,7 +148,7 @@ TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
   EXPECT_EQ(psd.rfind("label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain,step\n", 0), 0u);
   EXPECT_NE(psd.find("\nstrain_0.05,2000000,"), std::string::npos) << psd;
   EXPECT_NE(psd.find(",0.051,0\n"), std::string::npos);
-  EXPECT_NE(psd.find("\nstrain_0.1_not_reached_final_state,"), std::string::npos);
+  EXPECT_NE(psd.find("\nstrain_0.1_not_reached_final_at_0.051,"), std::string::npos);
   // Resumed at strain 0.06: the 5 % table is kept (not written twice), the 10 % one follows.
   PsdWriter r(f.dir.string(), {}, 2e6, {0.05, 0.10}, 0.06);
   RunState s;
@@ -165,7 +165,7 @@ TEST(PsdWriter, StrainLevelsGetTablesAndAResumeKeepsThem) {
   EXPECT_EQ(n["strain_0.05"], 25);
   EXPECT_EQ(n["strain_0.1"], 25);
   EXPECT_EQ(n["final"], 25);
-  EXPECT_EQ(n.count("strain_0.1_not_reached_final_state"), 0u);
+  EXPECT_EQ(n.count("strain_0.1_not_reached_final_at_0.051"), 0u);
 }
 
 TEST(ShapeWriter, MeansOfTheGrainsDescriptorsPerSample) {
