@@ -26,6 +26,9 @@ struct FragmentResult {
   // fragment_refinements): nodes of the children's grids, splits repeated on a finer grid.
   long grid_nodes = 0;
   int refinements = 0;
+  // Pieces too small to resolve that the builder gave to a kept child instead of removing
+  // (summary.json fragment_pieces_absorbed).
+  int absorbed = 0;
 };
 
 class FragmentBuilder {

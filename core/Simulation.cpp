@@ -420,6 +420,7 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
   sum.extra["fragment_refinements"] = static_cast<double>(fragment_refinements_);
+  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fragment_absorbed_);
   sum.extra["fragment_grid_nodes_per_child"] =
       fragment_children_ > 0 ? static_cast<double>(fragment_grid_nodes_) / static_cast<double>(fragment_children_) : 0.0;
   // Building the children and putting them into the engine, per breakage event.
@@ -652,6 +653,7 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   fragment_grid_nodes_ += frag.grid_nodes;
   fragment_children_ += static_cast<long>(frag.children.size());
   fragment_refinements_ += frag.refinements;
+  fragment_absorbed_ += frag.absorbed;
   // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
   double vsum = frag.removed_volume;
   for (const auto& f : frag.children) vsum += f.shape->volume();

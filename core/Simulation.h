@@ -214,7 +214,7 @@ class Simulation {
   double removed_mass_ = 0;
   RemovedMassByPath removed_by_path_;
   // The builders' cost figures (FragmentResult), counted per process like analysis failures.
-  long fragment_grid_nodes_ = 0, fragment_children_ = 0, fragment_refinements_ = 0;
+  long fragment_grid_nodes_ = 0, fragment_children_ = 0, fragment_refinements_ = 0, fragment_absorbed_ = 0;
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;

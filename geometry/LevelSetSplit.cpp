@@ -165,19 +165,18 @@ std::vector<double> child_values(const Lattice& L, const LevelSetGrid& W, const 
 }
 
 // The child grid: a signed distance again before use (Eq. 17's purpose: closest points,
-// no PDE); then kept as a child, or removed when thin, empty, below min_volume or without
-// a resolved zero level.
-void add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
-               SplitResult& out) {
+// no PDE); then kept as a child (true), or put in `removed` when thin, empty, below
+// min_volume or without a resolved zero level (false).
+bool add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
+               SplitResult& out, std::vector<SplitPiece>& removed) {
   const double h = g->spacing();
   g = g->reinitialised();
   const double vmin = *std::min_element(g->values().begin(), g->values().end());
   SplitPiece piece = measure(g);
   const bool thin = -vmin < 0.5 * o.min_thickness_cells * h;
   if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) {
-    out.removed_volume += std::max(0.0, piece.volume);
-    out.removed.push_back(std::move(piece));
-    return;
+    removed.push_back(std::move(piece));
+    return false;
   }
   try {
     std::vector<Vec3> nodes;
@@ -185,11 +184,33 @@ void add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOpt
     if (custom_nodes) (*custom_nodes)(region, *g, nodes, w);
     piece.grid = nodes.empty() ? g->with_values(g->values()) : g->with_nodes(std::move(nodes), std::move(w));
   } catch (const std::invalid_argument&) {  // no zero level resolved: too small to be a grain
-    out.removed_volume += piece.volume;
-    out.removed.push_back(std::move(piece));
-    return;
+    removed.push_back(std::move(piece));
+    return false;
   }
   out.children.push_back(std::move(piece));
+  return true;
+}
+
+// True when a node of component c lies within `cells` lattice cells (each axis) of an inside
+// node of a kept component (any region).
+bool next_to_kept(const Lattice& L, const Component& c, const std::vector<RegionLabels>& stored,
+                  const std::vector<char>& kept, int cells) {
+  for (const std::size_t q : c.nodes) {
+    const int i = static_cast<int>(q % L.n[0]);
+    const int j = static_cast<int>((q / L.n[0]) % L.n[1]);
+    const int k = static_cast<int>(q / (static_cast<std::size_t>(L.n[0]) * L.n[1]));
+    const int kz = L.dim == 3 ? cells : 0;
+    for (int dk = -kz; dk <= kz; ++dk)
+      for (int dj = -cells; dj <= cells; ++dj)
+        for (int di = -cells; di <= cells; ++di) {
+          const int a = i + di, b = j + dj, e = k + dk;
+          if (a < 0 || b < 0 || e < 0 || a >= L.n[0] || b >= L.n[1] || e >= L.n[2]) continue;
+          const std::size_t t = L.id(a, b, e);
+          for (const auto& rl : stored)
+            if (rl.label[t] >= 0 && kept[static_cast<std::size_t>(rl.label[t])]) return true;
+        }
+  }
+  return false;
 }
 
 SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int regions, const RegionFill& fill,
@@ -204,6 +225,8 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
     return out;
   }
   // Pass 2: one cropped, reinitialised grid per component.
+  std::vector<char> kept(comps.size(), 0);
+  std::vector<std::vector<SplitPiece>> dropped(comps.size());
   for (std::size_t ci = 0; ci < comps.size(); ++ci) {
     const Component& c = comps[ci];
     std::size_t slot = 0;
@@ -214,10 +237,22 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
       cnt[a] = c.hi[a] - c.lo[a] + 1 + 2 * o.pad;
     }
     std::vector<double> v = child_values(L, W, beyond, c, static_cast<int>(ci), stored[slot], lo, cnt);
-    add_child(LevelSetGrid::from_values(L.dim, L.point(lo[0], lo[1], lo[2]), L.h, cnt, std::move(v), node_spacing,
-                                        false, "level-set child"),
-              c.region, o, custom_nodes, out);
+    kept[ci] = add_child(LevelSetGrid::from_values(L.dim, L.point(lo[0], lo[1], lo[2]), L.h, cnt, std::move(v),
+                                                   node_spacing, false, "level-set child"),
+                         c.region, o, custom_nodes, out, dropped[ci]);
   }
+  // Pass 3: a dropped piece next to a kept child is a grid artefact of the cut: absorbed
+  // (its volume is left to the kept children); others are removed.
+  for (std::size_t ci = 0; ci < comps.size(); ++ci)
+    for (auto& p : dropped[ci]) {
+      if (o.absorb_cells > 0 && !out.children.empty() && next_to_kept(L, comps[ci], stored, kept, o.absorb_cells)) {
+        out.absorbed_volume += std::max(0.0, p.volume);
+        ++out.absorbed;
+        continue;
+      }
+      out.removed_volume += std::max(0.0, p.volume);
+      out.removed.push_back(std::move(p));
+    }
   return out;
 }
 

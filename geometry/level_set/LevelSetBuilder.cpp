@@ -108,7 +108,7 @@ SplitResult LevelSetBuilder::refined_split(const LevelSetGrid& phi1, const Fract
   for (const auto& x : phi1.nodes()) box.extend(x);
   const double floor = capped_spacing(opt_.resolve_diameter / opt_.cells_across, box, phi1.dimension(),
                                       opt_.max_grid_nodes);
-  while (((sr.missed && through) || !sr.removed.empty()) && so.spacing > floor * (1 + 1e-9)) {
+  while (((sr.missed && through) || !sr.removed.empty() || sr.absorbed > 0) && so.spacing > floor * (1 + 1e-9)) {
     so.spacing = std::max(0.5 * so.spacing, floor);
     sr = split_once(phi1, fracture, so, out.method);
     ++out.refinements;
@@ -141,6 +141,7 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
   SplitOptions so;
   so.min_thickness_cells = opt_.min_thickness_cells;
   so.min_volume = opt_.min_piece_volume_fraction * V;
+  so.absorb_cells = opt_.absorb_cells;
   FragmentResult out;
   const auto* cs = std::get_if<CuttingSurfaces>(&fracture);
   const bool through = cut_through(phi1, cs);
@@ -203,6 +204,7 @@ void LevelSetBuilder::finish_children(const Shape& parent, SplitResult& sr, Frag
   }
   out.removed_volume = k * sr.removed_volume;
   out.fallbacks += static_cast<int>(sr.removed.size());  // pieces removed as fines
+  out.absorbed += sr.absorbed;
 }
 
 const OptionTable& level_set_options() {
@@ -224,6 +226,11 @@ const OptionTable& level_set_options() {
         opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",
                     "a split that removes a piece its grid cannot resolve is repeated on grids of half the spacing, "
                     "down to this / cells_across; 0 = simulation.fines_diameter (no refinement when that is 0 too)"),
+        opt::integer("absorb_cells", &S::absorb_cells, 0, 10,
+                     "a piece the grid cannot resolve (thinner than min_thickness_cells, no zero level) within this "
+                     "many grid cells of a kept child is a lattice artefact of the cut: its volume goes to the kept "
+                     "children instead of the fines (Harmon et al. 2020 eqs. 14-15 keep such nodes in the child; "
+                     "ours); 0 = every such piece is removed"),
         opt::integer("max_grid_nodes", &S::max_grid_nodes, 1000, 100000000,
                      "nodes of one grid (a refined split's or a child's) at most: the spacing is raised to meet it "
                      "(ours)"),

@@ -11,6 +11,17 @@
 // parent's centroid by k^(1/3) (2D: k^(1/2)), which multiplies its grid volume by exactly
 // k, and removed_volume = k·Σ r_j. Hence Σ children + removed = V_parent (to rounding).
 //
+// Pieces the lattice cannot resolve (thinner than min_thickness_cells, or without a zero
+// level) that lie within absorb_cells cells of a kept child are artefacts of the cut, not
+// fragments: their volume is not removed but left to the kept children (it is left out of
+// the sum in k). Harmon et al. 2020 take φ3 and φ4 (eqs. 14–15) whole, so such nodes stay
+// part of a child there; our connectivity test would otherwise drop them as fines
+// (docs/validation.md, "Where the removed mass goes"). FragmentResult::absorbed counts them.
+// A cut that leaves one child and only absorbed pieces (a cap thinner than a cell) splits
+// nothing: one child and no removed volume, which the simulation records as no_split and
+// leaves the grain as it was. With cells_across > 0 a split with absorbed pieces is refined
+// first, like one with removed pieces.
+//
 // Resolution that follows the pieces (Harmon et al. 2020 §4.1 name three ways to treat
 // pieces as small as their discretisation: stop breaking them, refine their discretisation,
 // remove them; this is the second). Off by default (measured: docs/validation.md). With
@@ -41,6 +52,7 @@ struct LevelSetBuilderOptions {
   double cells_across = 0;                 // grid cells across a child's thickness; 0 = off
   double resolve_diameter = 0;             // m; splits are refined down to this / cells_across
   long max_grid_nodes = 1000000;           // nodes of one grid (a split's or a child's) at most
+  int absorb_cells = 2;                    // a piece to remove this near a kept child is absorbed
 };
 
 class LevelSetBuilder final : public FragmentBuilder {

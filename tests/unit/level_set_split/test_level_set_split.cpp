@@ -212,13 +212,50 @@ TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
       }
   }
   ASSERT_GT(xn, 0.5 * kR);
-  LevelSetBuilder b;
+  const CuttingSurfaces cut{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}};
+  LevelSetBuilderOptions o;
+  o.absorb_cells = 0;  // every unresolved piece removed
   FragmentResult fr;
-  ASSERT_NO_THROW(fr = b.build(*parent, CuttingSurfaces{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}}));
+  ASSERT_NO_THROW(fr = LevelSetBuilder(o).build(*parent, cut));
   EXPECT_EQ(fr.children.size(), 1u);
   EXPECT_GT(fr.removed_volume, 0.0);
   EXPECT_TRUE(std::isfinite(fr.removed_volume));
+  EXPECT_EQ(fr.absorbed, 0);
   EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  // The default absorbs the cap (a node next to the kept child): nothing is removed, one
+  // child with the parent's whole volume, which the simulation records as no_split.
+  const FragmentResult kept = LevelSetBuilder().build(*parent, cut);
+  EXPECT_EQ(kept.children.size(), 1u);
+  EXPECT_EQ(kept.removed_volume, 0.0);
+  EXPECT_EQ(kept.absorbed, 1);
+  EXPECT_EQ(kept.fallbacks, 0);
+  EXPECT_LT(budget_error(kept, parent->volume()), 1e-9);
+}
+
+// Pieces thinner than a cell that a cut leaves next to a kept child are lattice artefacts:
+// split_by_planes reports them absorbed, not removed, when absorb_cells > 0 (Harmon et al.
+// 2020 eqs. 14–15 take φ3 and φ4 whole, with no connectivity test).
+TEST(LevelSetSplit, PiecesThinnerThanACellNextToAKeptChildAreAbsorbed) {
+  // A square 2 mm wide on a 0.1 mm lattice: its outermost inside nodes lie at ±0.9 mm. Two
+  // planes 0.3 cells inside them (x = 0.87 mm, y = 0.87 mm) leave a one-node corner and two
+  // one-node-wide strips beyond them, all thinner than a cell, beside the big piece.
+  const double h = 0.1e-3;
+  const auto g = LevelSetGrid::sample(2, {{-1e-3, -1e-3, 0}, {1e-3, 1e-3, 0}}, h, [](const Vec3& p) {
+    return std::max(std::abs(p.x), std::abs(p.y)) - 1e-3;
+  });
+  const std::vector<SplitPlane> planes{{{1, 0, 0}, 0.87e-3}, {{0, 1, 0}, 0.87e-3}};
+  SplitOptions so;
+  so.absorb_cells = 0;
+  const SplitResult off = split_by_planes(*g, planes, so);
+  so.absorb_cells = 2;
+  const SplitResult on = split_by_planes(*g, planes, so);
+  ASSERT_EQ(off.children.size(), 1u);
+  ASSERT_EQ(off.removed.size(), 3u);
+  EXPECT_EQ(on.children.size(), 1u);
+  EXPECT_TRUE(on.removed.empty());
+  EXPECT_EQ(on.removed_volume, 0.0);
+  EXPECT_EQ(on.absorbed, 3);
+  EXPECT_NEAR(on.absorbed_volume, off.removed_volume, 1e-12 * off.removed_volume);
 }
 
 // Harmon et al. 2020 §4.1, second method: the same sub-cell cap is kept when the split may be
@@ -246,10 +283,13 @@ TEST(LevelSetSplit, ThinCapIsKeptWhenTheSplitIsRefined) {
     const LevelSetGrid& g = ch.shape->level_set();
     const double depth = -*std::min_element(g.values().begin(), g.values().end());
     EXPECT_NEAR(2 * depth / g.spacing(), 20.0, 2.0);
-    if (ch.shape->volume() == cap) EXPECT_LT(g.spacing(), 0.1 * kH);
+    if (ch.shape->volume() == cap) {
+      EXPECT_LT(g.spacing(), 0.1 * kH);
+    }
   }
-  // Off (cells_across 0): the parent's lattice, the cap removed as before.
+  // Off (cells_across 0) and nothing absorbed: the parent's lattice, the cap removed.
   o.cells_across = 0;
+  o.absorb_cells = 0;
   const FragmentResult off = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{1, 0, 0}, c}}});
   EXPECT_EQ(off.children.size(), 1u);
   EXPECT_GT(off.removed_volume, 0.0);
