@@ -106,6 +106,11 @@ SimulationState Simulation::saved_state() const {
   s.small_grains_removed = guard_max_.small_grains_removed;
   s.guard_max_overlap_fraction = guard_max_.max_overlap_fraction;
   s.guard_max_energy_ratio = guard_max_.energy_ratio;
+  s.analysis_failures = analysis_failures_;
+  s.rocks_fed = fed_;
+  s.mass_fed = mass_fed_;
+  s.product = product_;
+  s.product_mass = product_mass_;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -127,6 +132,9 @@ void Simulation::restore_packing(const SimulationState& st, std::vector<Grain> g
 void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   if (!grains_.empty()) throw std::logic_error("Simulation::resume: grains were already added");
   if (container_.height <= 0) throw std::logic_error("Simulation::resume: set the container first");
+  if (st.rocks_fed > feed_.count)
+    throw std::invalid_argument("checkpoint: " + std::to_string(st.rocks_fed) + " rocks fed, but the scene feeds " +
+                                std::to_string(feed_.count));
   for (auto& g : grains) {
     if (!g.shape) throw std::invalid_argument("checkpoint grain " + std::to_string(g.id) + " has no shape");
     if (g.id < 0 || g.id >= st.next_id)
@@ -150,11 +158,17 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
   energy_in_ = st.energy_in;
+  initial_elastic_counted_ = true;  // in the checkpoint's energy_in
   reference_diameter_ = st.reference_diameter;
   guard_max_.small_grain_overlaps = st.small_grain_overlaps;
   guard_max_.small_grains_removed = st.small_grains_removed;
   guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
   guard_max_.energy_ratio = st.guard_max_energy_ratio;
+  analysis_failures_ = st.analysis_failures;
+  fed_ = st.rocks_fed;
+  mass_fed_ = st.mass_fed;
+  product_ = st.product;
+  product_mass_ = st.product_mass;
 }
 
 double Simulation::area() const {
@@ -174,6 +188,13 @@ double Simulation::time_step(double stress) const {
 }
 
 void Simulation::sync_grains() { engine_->read_state(grains_); }
+
+void Simulation::account_step(double platen_force, double platen_travel) {
+  energy_in_ += std::abs(platen_force * platen_travel);
+  if (initial_elastic_counted_) return;
+  energy_in_ += engine_->elastic_energy();
+  initial_elastic_counted_ = true;
+}
 
 void Simulation::check_guards(const char* phase, double dt, bool full) {
   GuardContext at;
@@ -261,7 +282,9 @@ RunSummary Simulation::run(const Progress& progress) {
   RunSummary sum;
   RunState st = start_run(sum);
   auto last_progress = Clock::now();
-  update_open_scene();
+  // A checkpoint is written at a sample step, after that step's discharge and feed: a
+  // resumed run does them next at the following sample step, as the uninterrupted run does.
+  if (!resumed_) update_open_scene();
   const Timings before_loop = timings_;
   const auto t_loop = Clock::now();
   while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
@@ -388,7 +411,7 @@ void Simulation::step_once(double dt, RunState& st) {
   time_ += dt;
   ++step_;
   st = state();
-  account_platen_work(st.platen_force, st.platen_height - z_before);
+  account_step(st.platen_force, st.platen_height - z_before);
   if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
     t0 = Clock::now();
     update_open_scene();

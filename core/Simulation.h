@@ -74,6 +74,16 @@ struct SimulationState {
   long small_grain_overlaps = 0;
   long small_grains_removed = 0;  // tiny grains that left the container, taken out as fines
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
+  // Breakage analyses or fragment builds that threw, by the error's leading word
+  // (summary.json: analyses_failed_<word>).
+  std::map<std::string, long> analysis_failures;
+  // Open scenes (core/OpenScene.h): rocks fed so far (the next one is the feed's rock number
+  // rocks_fed), their mass, and the product collected so far. The moving walls' pose follows
+  // from `time` (their motion is prescribed).
+  long rocks_fed = 0;
+  double mass_fed = 0;
+  std::vector<ProductGrain> product;
+  double product_mass = 0;
 };
 
 // Where the settling of a packing (scenarios/Packing.h) stands after a step: what a
@@ -156,9 +166,13 @@ class Simulation {
   void sync_grains();
 
   // Physical guards (core/Guards.h), for code that steps the engine outside run() (packing
-  // settlement): account the platen's work over one step, and check every invariant now.
-  // Throws PhysicsGuardError.
-  void account_platen_work(double force, double travel) { energy_in_ += std::abs(force * travel); }
+  // settlement): account the energy one engine step put in, and check every invariant now.
+  // Throws PhysicsGuardError. The energy of a step: the platen's work (force × travel), and
+  // after the first step of the run (or of its settling) the elastic energy stored in the
+  // overlaps the grains were placed with (Engine::elastic_energy of that step's forces,
+  // evaluated at the initial poses): it is energy present at the start, which the engine
+  // turns into motion as it pushes the grains apart.
+  void account_step(double platen_force, double platen_travel);
   void check_guards(const char* phase, double dt, bool full);
   // Largest margins the guards have seen so far in this process.
   const GuardReading& guard_margins() const { return guard_max_; }
@@ -228,6 +242,7 @@ class Simulation {
   std::size_t initial_grains_ = 0;
   double initial_mass_ = 0, initial_void_ratio_ = 0;
   double energy_in_ = 0;
+  bool initial_elastic_counted_ = false;  // account_step counted the initial overlaps' energy
   double reference_diameter_ = 0;
   GuardReading guard_max_;
   // The engine's contact solver over this process's loading steps (Engine::solver_report).

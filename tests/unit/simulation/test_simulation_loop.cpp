@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <map>
 #include <stdexcept>
 #include <thread>
 
 #include "core/Simulation.h"
+#include "output/Checkpoint.h"
+#include "output/Writers.h"
 
 using namespace crumble;
 
@@ -553,4 +556,38 @@ TEST(SimulationLoop, AFailedAnalysisLeavesTheGrainIntactAndIsCounted) {
   EXPECT_EQ(rec->failed, 3 + on_grain_2);
   EXPECT_EQ(sum.grains_final, 8u + 7u);
   EXPECT_NEAR(sum.mass_final + sum.mass_removed, sum.mass_initial, 1e-12 * sum.mass_initial);
+}
+
+// The failure counters are part of a checkpoint: a run resumed from it (here, from the
+// checkpoint at the end of a run with failures, by models that no longer fail) reports the
+// failures of the run it continues, analyses_failed and analyses_failed_<word>.
+TEST(SimulationLoop, FailedAnalysisCountsSurviveACheckpoint) {
+  class FailsOnGrain2 : public ThresholdModel {
+   public:
+    BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> cs) const override {
+      if (g.id == 2) throw std::invalid_argument("degenerate shape: no lattice");
+      return ThresholdModel::analyse(g, m, cs);
+    }
+  };
+  EngineContext ctx;
+  SqueezeSetup u = squeeze_setup();
+  Simulation a(std::make_unique<SqueezeEngine>(), std::make_unique<FailsOnGrain2>(), std::make_unique<EighthBuilder>(),
+               ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  a.set_container({0.01, 0.01, 0.01, 0});
+  add_spheres(a, 8, 1e-3);
+  const RunSummary sa = a.run();
+  const double failed = sa.extra.at("analyses_failed_degenerate_shape");
+  ASSERT_GE(failed, 1);
+  const auto dir = std::filesystem::temp_directory_path() / "crumble_simulation_loop" / "failures";
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  write_file_atomic(file, checkpoint_json(a, "squeeze").dump());
+  const Checkpoint cp = read_checkpoint(file, "squeeze", 3);
+  Simulation b(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(), std::make_unique<EighthBuilder>(),
+               ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  b.set_container({0.01, 0.01, 0.01, 0});
+  b.resume(cp.state, cp.grains);
+  const RunSummary sb = b.run();
+  EXPECT_EQ(sb.extra.at("analyses_failed_degenerate_shape"), failed);
+  EXPECT_EQ(sb.extra.at("analyses_failed"), sa.extra.at("analyses_failed"));
 }
