@@ -23,8 +23,8 @@
 //   reported, never dropped silently — unless it lies within `absorb_cells` lattice cells of
 //   a kept child: then it is an artefact of cutting a lattice (a row of nodes a plane cut off
 //   from its piece, a cap thinner than a cell; Harmon et al. 2020 take φ3 and φ4 whole, with
-//   no connectivity test, so such nodes stay part of a child) and its volume is reported as
-//   absorbed, for the caller to give to the kept children.
+//   no connectivity test, so such nodes stay part of a child) and that child is rebuilt as
+//   the union of the two (the minimum of their values: across a cut plane, φ1 again).
 #pragma once
 #include <functional>
 #include <memory>
@@ -64,8 +64,8 @@ struct SplitResult {
   std::vector<SplitPiece> children;
   std::vector<SplitPiece> removed;  // thin or small pieces (grid volume counted)
   double removed_volume = 0;        // Σ removed[i].volume
-  int absorbed = 0;                 // pieces to remove that lay next to a kept child
-  double absorbed_volume = 0;       // their grid volume (not in removed_volume)
+  int absorbed = 0;                 // pieces to remove that a kept child took in
+  double absorbed_volume = 0;       // their own grid volume (now inside that child)
   // The surfaces missed the grain (a single piece): no split, `children` and `removed`
   // are empty. Not an error.
   bool missed = false;

@@ -228,8 +228,8 @@ const OptionTable& level_set_options() {
                     "down to this / cells_across; 0 = simulation.fines_diameter (no refinement when that is 0 too)"),
         opt::integer("absorb_cells", &S::absorb_cells, 0, 10,
                      "a piece the grid cannot resolve (thinner than min_thickness_cells, no zero level) within this "
-                     "many grid cells of a kept child is a lattice artefact of the cut: its volume goes to the kept "
-                     "children instead of the fines (Harmon et al. 2020 eqs. 14-15 keep such nodes in the child; "
+                     "many grid cells of a kept child is a lattice artefact of the cut: the child is rebuilt as the "
+                     "union of the two instead of removing it as fines (Harmon et al. 2020 eqs. 14-15 keep such nodes in the child; "
                      "ours); 0 = every such piece is removed"),
         opt::integer("max_grid_nodes", &S::max_grid_nodes, 1000, 100000000,
                      "nodes of one grid (a refined split's or a child's) at most: the spacing is raised to meet it "

@@ -13,9 +13,9 @@
 //
 // Pieces the lattice cannot resolve (thinner than min_thickness_cells, or without a zero
 // level) that lie within absorb_cells cells of a kept child are artefacts of the cut, not
-// fragments: their volume is not removed but left to the kept children (it is left out of
-// the sum in k). Harmon et al. 2020 take φ3 and φ4 (eqs. 14–15) whole, so such nodes stay
-// part of a child there; our connectivity test would otherwise drop them as fines
+// fragments: the child is rebuilt as the union of the two, so their volume stays in the
+// grains (split_by_planes). Harmon et al. 2020 take φ3 and φ4 (eqs. 14–15) whole, so such
+// nodes stay part of a child there; our connectivity test would otherwise drop them as fines
 // (docs/validation.md, "Where the removed mass goes"). FragmentResult::absorbed counts them.
 // A cut that leaves one child and only absorbed pieces (a cap thinner than a cell) splits
 // nothing: one child and no removed volume, which the simulation records as no_split and

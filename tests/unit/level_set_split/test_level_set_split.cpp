@@ -256,6 +256,11 @@ TEST(LevelSetSplit, PiecesThinnerThanACellNextToAKeptChildAreAbsorbed) {
   EXPECT_EQ(on.removed_volume, 0.0);
   EXPECT_EQ(on.absorbed, 3);
   EXPECT_NEAR(on.absorbed_volume, off.removed_volume, 1e-12 * off.removed_volume);
+  // The child took the strips in: it holds the square's whole grid volume (to the grid's own
+  // error), not the cut piece's plus a rescaling.
+  const double whole = g->mass_properties().volume;
+  EXPECT_LT(off.children[0].volume, 0.9 * whole);
+  EXPECT_NEAR(on.children[0].volume / whole, 1.0, 0.01);
 }
 
 // Harmon et al. 2020 §4.1, second method: the same sub-cell cap is kept when the split may be
