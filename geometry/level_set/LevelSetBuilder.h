@@ -17,6 +17,7 @@
 // grains (split_by_planes). Harmon et al. 2020 take φ3 and φ4 (eqs. 14–15) whole, so such
 // nodes stay part of a child there; our connectivity test would otherwise drop them as fines
 // (docs/validation.md, "Where the removed mass goes"). FragmentResult::absorbed counts them.
+// Off by default (absorb_cells 0) until measured beyond single runs of the quick file.
 // A cut that leaves one child and only absorbed pieces (a cap thinner than a cell) splits
 // nothing: one child and no removed volume, which the simulation records as no_split and
 // leaves the grain as it was. With cells_across > 0 a split with absorbed pieces is refined
@@ -52,7 +53,7 @@ struct LevelSetBuilderOptions {
   double cells_across = 0;                 // grid cells across a child's thickness; 0 = off
   double resolve_diameter = 0;             // m; splits are refined down to this / cells_across
   long max_grid_nodes = 1000000;           // nodes of one grid (a split's or a child's) at most
-  int absorb_cells = 2;                    // a piece to remove this near a kept child is absorbed
+  int absorb_cells = 0;                    // a piece to remove this near a kept child is absorbed
 };
 
 class LevelSetBuilder final : public FragmentBuilder {

@@ -213,8 +213,7 @@ TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
   }
   ASSERT_GT(xn, 0.5 * kR);
   const CuttingSurfaces cut{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}};
-  LevelSetBuilderOptions o;
-  o.absorb_cells = 0;  // every unresolved piece removed
+  LevelSetBuilderOptions o;  // the default: every unresolved piece removed
   FragmentResult fr;
   ASSERT_NO_THROW(fr = LevelSetBuilder(o).build(*parent, cut));
   EXPECT_EQ(fr.children.size(), 1u);
@@ -222,9 +221,10 @@ TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
   EXPECT_TRUE(std::isfinite(fr.removed_volume));
   EXPECT_EQ(fr.absorbed, 0);
   EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
-  // The default absorbs the cap (a node next to the kept child): nothing is removed, one
+  // absorb_cells 2 absorbs the cap (a node next to the kept child): nothing is removed, one
   // child with the parent's whole volume, which the simulation records as no_split.
-  const FragmentResult kept = LevelSetBuilder().build(*parent, cut);
+  o.absorb_cells = 2;
+  const FragmentResult kept = LevelSetBuilder(o).build(*parent, cut);
   EXPECT_EQ(kept.children.size(), 1u);
   EXPECT_EQ(kept.removed_volume, 0.0);
   EXPECT_EQ(kept.absorbed, 1);
@@ -292,9 +292,8 @@ TEST(LevelSetSplit, ThinCapIsKeptWhenTheSplitIsRefined) {
       EXPECT_LT(g.spacing(), 0.1 * kH);
     }
   }
-  // Off (cells_across 0) and nothing absorbed: the parent's lattice, the cap removed.
+  // Off (cells_across 0): the parent's lattice, the cap removed.
   o.cells_across = 0;
-  o.absorb_cells = 0;
   const FragmentResult off = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{1, 0, 0}, c}}});
   EXPECT_EQ(off.children.size(), 1u);
   EXPECT_GT(off.removed_volume, 0.0);
