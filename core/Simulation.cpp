@@ -90,6 +90,7 @@ SimulationState Simulation::saved_state() const {
   s.removed_volume = removed_volume_;
   s.removed_mass = removed_mass_;
   s.removed_by_path = removed_by_path_;
+  s.fragment_counts = fragment_counts_;
   s.events = events_;
   s.analyses = analyses_;
   s.analyses_skipped = analyses_skipped_;
@@ -148,6 +149,7 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   removed_volume_ = st.removed_volume;
   removed_mass_ = st.removed_mass;
   removed_by_path_ = st.removed_by_path;
+  fragment_counts_ = st.fragment_counts;
   events_ = st.events;
   analyses_ = st.analyses;
   analyses_skipped_ = st.analyses_skipped;
@@ -442,12 +444,11 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
-  sum.extra["fragment_refinements"] = static_cast<double>(fragment_refinements_);
-  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fragment_absorbed_);
+  const FragmentCounts& fc = fragment_counts_;
+  sum.extra["fragment_refinements"] = static_cast<double>(fc.refinements);
+  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fc.absorbed);
   sum.extra["fragment_grid_nodes_per_child"] =
-      fragment_children_ > 0 ? static_cast<double>(fragment_grid_nodes_) / static_cast<double>(fragment_children_) : 0.0;
-  // Building the children and putting them into the engine, per breakage event.
-  sum.extra["fragments_s_per_event"] = events_ > 0 ? timings_.fragments / static_cast<double>(events_) : 0.0;
+      fc.children > 0 ? static_cast<double>(fc.grid_nodes) / static_cast<double>(fc.children) : 0.0;
   long failed = 0;
   for (const auto& [word, count] : analysis_failures_) {
     sum.extra["analyses_failed_" + word] = static_cast<double>(count);
@@ -673,10 +674,10 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   ev.fragment_method = frag.method;
   ev.analysis = rec.analysis;
   fallbacks_ += frag.fallbacks;
-  fragment_grid_nodes_ += frag.grid_nodes;
-  fragment_children_ += static_cast<long>(frag.children.size());
-  fragment_refinements_ += frag.refinements;
-  fragment_absorbed_ += frag.absorbed;
+  fragment_counts_.grid_nodes += frag.grid_nodes;
+  fragment_counts_.children += static_cast<long>(frag.children.size());
+  fragment_counts_.refinements += frag.refinements;
+  fragment_counts_.absorbed += frag.absorbed;
   // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
   double vsum = frag.removed_volume;
   for (const auto& f : frag.children) vsum += f.shape->volume();

@@ -48,6 +48,15 @@ struct RemovedMassByPath {
   double guard = 0;           // small grains that left the container (guards)
 };
 
+// What the fragment builders made so far (summary.json fragment_grid_nodes_per_child,
+// fragment_refinements, fragment_pieces_absorbed).
+struct FragmentCounts {
+  long grid_nodes = 0;   // nodes of the children's grids
+  long children = 0;     // children built
+  long refinements = 0;  // splits repeated on a finer grid
+  long absorbed = 0;     // unresolved pieces merged into a kept child
+};
+
 // Everything besides the grains that a run needs to continue from a checkpoint. The
 // engine is rebuilt from the grains: contact history and solver warm starts start afresh,
 // and the platen starts at rest where it was.
@@ -58,6 +67,7 @@ struct SimulationState {
   double platen_position = 0;
   double removed_volume = 0, removed_mass = 0;
   RemovedMassByPath removed_by_path;
+  FragmentCounts fragment_counts;
   long events = 0, analyses = 0, fallbacks = 0, dt_reductions = 0;
   long analyses_skipped = 0;  // screened in but skipped by the skip rule (Screening.h)
   ScreeningCounts screened;   // grain checks per screening outcome
@@ -228,7 +238,7 @@ class Simulation {
   double removed_mass_ = 0;
   RemovedMassByPath removed_by_path_;
   // The builders' cost figures (FragmentResult), counted per process like analysis failures.
-  long fragment_grid_nodes_ = 0, fragment_children_ = 0, fragment_refinements_ = 0, fragment_absorbed_ = 0;
+  FragmentCounts fragment_counts_;
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;
