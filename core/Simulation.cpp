@@ -89,6 +89,8 @@ SimulationState Simulation::saved_state() const {
   s.platen_position = engine_->platen_position();
   s.removed_volume = removed_volume_;
   s.removed_mass = removed_mass_;
+  s.removed_by_path = removed_by_path_;
+  s.fragment_counts = fragment_counts_;
   s.events = events_;
   s.analyses = analyses_;
   s.analyses_skipped = analyses_skipped_;
@@ -146,6 +148,8 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   initial_height_ = st.initial_height;
   removed_volume_ = st.removed_volume;
   removed_mass_ = st.removed_mass;
+  removed_by_path_ = st.removed_by_path;
+  fragment_counts_ = st.fragment_counts;
   events_ = st.events;
   analyses_ = st.analyses;
   analyses_skipped_ = st.analyses_skipped;
@@ -242,6 +246,7 @@ void Simulation::remove_escaped(const std::vector<GrainId>& ids) {
     engine_->remove_grain(g.id);
     removed_volume_ += g.shape->volume();
     removed_mass_ += g.mass(ctx_.materials[g.material].density);
+    removed_by_path_.guard += g.mass(ctx_.materials[g.material].density);
     ++guard_max_.small_grains_removed;
     gone[i] = 1;
   }
@@ -428,12 +433,22 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.grains_final = grains_.size();
   for (const auto& g : grains_) sum.mass_final += g.mass(ctx_.materials[g.material].density);
   sum.mass_removed = removed_mass_;
+  sum.extra["mass_removed_crushed_kg"] = removed_by_path_.crushed;
+  sum.extra["mass_removed_chip_kg"] = removed_by_path_.chip;
+  sum.extra["mass_removed_split_pieces_kg"] = removed_by_path_.split_pieces;
+  sum.extra["mass_removed_fines_diameter_kg"] = removed_by_path_.fines_diameter;
+  sum.extra["mass_removed_guard_kg"] = removed_by_path_.guard;
   sum.void_ratio_final = st.void_ratio;
   sum.breakage_events = events_;
   sum.analyses = analyses_;
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
+  const FragmentCounts& fc = fragment_counts_;
+  sum.extra["fragment_refinements"] = static_cast<double>(fc.refinements);
+  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fc.absorbed);
+  sum.extra["fragment_grid_nodes_per_child"] =
+      fc.children > 0 ? static_cast<double>(fc.grid_nodes) / static_cast<double>(fc.children) : 0.0;
   long failed = 0;
   for (const auto& [word, count] : analysis_failures_) {
     sum.extra["analyses_failed_" + word] = static_cast<double>(count);
@@ -442,6 +457,9 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.extra["analyses_failed"] = static_cast<double>(failed);
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
+  // The part of all the solid that ever entered (initial grains and fed rocks) removed as fines.
+  const double entered = sum.mass_initial + mass_fed_;
+  sum.extra["fines_mass_fraction"] = entered > 0 ? removed_mass_ / entered : 0.0;
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
@@ -656,6 +674,10 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   ev.fragment_method = frag.method;
   ev.analysis = rec.analysis;
   fallbacks_ += frag.fallbacks;
+  fragment_counts_.grid_nodes += frag.grid_nodes;
+  fragment_counts_.children += static_cast<long>(frag.children.size());
+  fragment_counts_.refinements += frag.refinements;
+  fragment_counts_.absorbed += frag.absorbed;
   // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
   double vsum = frag.removed_volume;
   for (const auto& f : frag.children) vsum += f.shape->volume();
@@ -667,6 +689,11 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   std::vector<Grain> children = make_children(parent, frag, mat, ev);
   removed_volume_ += ev.removed_volume;
   removed_mass_ += ev.removed_volume * mat.density;
+  double& by_builder = frag.children.empty()       ? removed_by_path_.crushed
+                       : frag.children.size() == 1 ? removed_by_path_.chip
+                                                   : removed_by_path_.split_pieces;
+  by_builder += frag.removed_volume * mat.density;
+  removed_by_path_.fines_diameter += (ev.removed_volume - frag.removed_volume) * mat.density;
   engine_->replace_grain(parent.id, children);
   for (auto& c : children) added.push_back(std::move(c));
   ++events_;

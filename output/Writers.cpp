@@ -496,6 +496,9 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
                            {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
                            {"fragments", s.timings.fragments}, {"guards", s.timings.guards},
                            {"output", s.timings.observers}, {"loop", s.timings.loop}};
+  // Building the children and putting them into the engine, per breakage event.
+  j["time_breakdown_s"]["fragments_per_event"] =
+      s.breakage_events > 0 ? s.timings.fragments / static_cast<double>(s.breakage_events) : 0.0;
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)

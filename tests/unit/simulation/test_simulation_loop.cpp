@@ -202,6 +202,10 @@ TEST(SimulationLoop, FinesLeaveTheEngineButStayInTheBudget) {
   EXPECT_GT(r.sum.mass_removed, 0);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
   for (const auto& g : r.grains) EXPECT_GE(g.shape->equivalent_diameter(), 1.05e-3);
+  // All of it went through simulation.fines_diameter (summary.json mass_removed_<path>_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_fines_diameter_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_chip_kg"), 0);
+  EXPECT_NEAR(r.sum.extra.at("fines_mass_fraction"), r.sum.mass_removed / r.sum.mass_initial, 1e-12);
 }
 
 // A builder's removed pieces (one child + removed volume, e.g. a level-set sliver thinner
@@ -213,6 +217,10 @@ TEST(SimulationLoop, BuilderRemovedVolumeCountsAsRemovedMass) {
   const double rho = Material{}.density, V = 4.0 / 3 * kPi * 1e-9;
   EXPECT_NEAR(r.sum.mass_removed, 8 * 0.125 * V * rho, 1e-9 * r.sum.mass_initial);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
+  // One child and removed pieces: the chip path (summary.json mass_removed_chip_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_chip_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_split_pieces_kg"), 0);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_fines_diameter_kg"), 0);
 }
 
 TEST(SimulationLoop, ResultsDoNotDependOnThreads) {
