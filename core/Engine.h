@@ -40,6 +40,9 @@ struct EngineContext {
   std::vector<Material> materials{Material{}};
   int threads = 1;
   std::uint64_t seed = 1;
+  // m: simulation.fines_diameter, the size below which children leave the run (a fragment
+  // builder that refines its resolution need not resolve pieces finer than this).
+  double fines_diameter = 0;
 };
 
 class Engine {
@@ -68,6 +71,10 @@ class Engine {
 
   // Copy engine poses and velocities into the records (matched by id).
   virtual void read_state(std::span<Grain> grains) const = 0;
+  // Elastic energy (J; 2D: J/m) stored in the contacts' normal springs at the last force
+  // evaluation (a penalty engine: lsdem, ½·k_n·δ² per contact, (2/5)·F_n·δ for Hertz). 0 for
+  // an engine whose contacts are constraints (Bullet, ODE): it stores none.
+  virtual double elastic_energy() const { return 0; }
   // Every active contact, grain–grain once (force on `a`) and grain–wall.
   virtual std::vector<Contact> contacts() const = 0;
 

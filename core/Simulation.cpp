@@ -109,6 +109,8 @@ SimulationState Simulation::saved_state() const {
   s.platen_position = engine_->platen_position();
   s.removed_volume = removed_volume_;
   s.removed_mass = removed_mass_;
+  s.removed_by_path = removed_by_path_;
+  s.fragment_counts = fragment_counts_;
   s.events = events_;
   s.analyses = analyses_;
   s.analyses_skipped = analyses_skipped_;
@@ -125,6 +127,11 @@ SimulationState Simulation::saved_state() const {
   s.small_grains_removed = guard_max_.small_grains_removed;
   s.guard_max_overlap_fraction = guard_max_.max_overlap_fraction;
   s.guard_max_energy_ratio = guard_max_.energy_ratio;
+  s.analysis_failures = analysis_failures_;
+  s.rocks_fed = fed_;
+  s.mass_fed = mass_fed_;
+  s.product = product_;
+  s.product_mass = product_mass_;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -146,6 +153,9 @@ void Simulation::restore_packing(const SimulationState& st, std::vector<Grain> g
 void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   if (!grains_.empty()) throw std::logic_error("Simulation::resume: grains were already added");
   if (container_.height <= 0) throw std::logic_error("Simulation::resume: set the container first");
+  if (st.rocks_fed > feed_.count)
+    throw std::invalid_argument("checkpoint: " + std::to_string(st.rocks_fed) + " rocks fed, but the scene feeds " +
+                                std::to_string(feed_.count));
   for (auto& g : grains) {
     if (!g.shape) throw std::invalid_argument("checkpoint grain " + std::to_string(g.id) + " has no shape");
     if (g.id < 0 || g.id >= st.next_id)
@@ -158,6 +168,8 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   initial_height_ = st.initial_height;
   removed_volume_ = st.removed_volume;
   removed_mass_ = st.removed_mass;
+  removed_by_path_ = st.removed_by_path;
+  fragment_counts_ = st.fragment_counts;
   events_ = st.events;
   analyses_ = st.analyses;
   analyses_skipped_ = st.analyses_skipped;
@@ -168,11 +180,17 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   schedule_.set_last_stress(st.schedule_last_stress);
   max_platen_stress_ = st.max_platen_stress;
   energy_in_ = st.energy_in;
+  initial_elastic_counted_ = true;  // in the checkpoint's energy_in
   reference_diameter_ = st.reference_diameter;
   guard_max_.small_grain_overlaps = st.small_grain_overlaps;
   guard_max_.small_grains_removed = st.small_grains_removed;
   guard_max_.max_overlap_fraction = st.guard_max_overlap_fraction;
   guard_max_.energy_ratio = st.guard_max_energy_ratio;
+  analysis_failures_ = st.analysis_failures;
+  fed_ = st.rocks_fed;
+  mass_fed_ = st.mass_fed;
+  product_ = st.product;
+  product_mass_ = st.product_mass;
 }
 
 double Simulation::area() const {
@@ -192,6 +210,13 @@ double Simulation::time_step(double stress) const {
 }
 
 void Simulation::sync_grains() { engine_->read_state(grains_); }
+
+void Simulation::account_step(double platen_force, double platen_travel) {
+  energy_in_ += std::abs(platen_force * platen_travel);
+  if (initial_elastic_counted_) return;
+  energy_in_ += engine_->elastic_energy();
+  initial_elastic_counted_ = true;
+}
 
 void Simulation::check_guards(const char* phase, double dt, bool full) {
   GuardContext at;
@@ -241,6 +266,7 @@ void Simulation::remove_escaped(const std::vector<GrainId>& ids) {
     engine_->remove_grain(g.id);
     removed_volume_ += g.shape->volume();
     removed_mass_ += g.mass(ctx_.materials[g.material].density);
+    removed_by_path_.guard += g.mass(ctx_.materials[g.material].density);
     ++guard_max_.small_grains_removed;
     gone[i] = 1;
   }
@@ -278,7 +304,9 @@ RunSummary Simulation::run(const Progress& progress) {
   RunSummary sum;
   RunState st = start_run(sum);
   auto last_progress = Clock::now();
-  update_open_scene();
+  // A checkpoint is written at a sample step, after that step's discharge and feed: a
+  // resumed run does them next at the following sample step, as the uninterrupted run does.
+  if (!resumed_) update_open_scene();
   const Timings before_loop = timings_;
   const auto t_loop = Clock::now();
   while (!loading_.finished(time_, st.platen_stress, st.platen_force, st.axial_strain)) {
@@ -401,7 +429,7 @@ void Simulation::step_once(double dt, RunState& st) {
   time_ += dt;
   ++step_;
   st = state();
-  account_platen_work(st.platen_force, st.platen_height - z_before);
+  account_step(st.platen_force, st.platen_height - z_before);
   if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
     t0 = Clock::now();
     update_open_scene();
@@ -421,12 +449,22 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.grains_final = grains_.size();
   for (const auto& g : grains_) sum.mass_final += g.mass(ctx_.materials[g.material].density);
   sum.mass_removed = removed_mass_;
+  sum.extra["mass_removed_crushed_kg"] = removed_by_path_.crushed;
+  sum.extra["mass_removed_chip_kg"] = removed_by_path_.chip;
+  sum.extra["mass_removed_split_pieces_kg"] = removed_by_path_.split_pieces;
+  sum.extra["mass_removed_fines_diameter_kg"] = removed_by_path_.fines_diameter;
+  sum.extra["mass_removed_guard_kg"] = removed_by_path_.guard;
   sum.void_ratio_final = st.void_ratio;
   sum.breakage_events = events_;
   sum.analyses = analyses_;
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
+  const FragmentCounts& fc = fragment_counts_;
+  sum.extra["fragment_refinements"] = static_cast<double>(fc.refinements);
+  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fc.absorbed);
+  sum.extra["fragment_grid_nodes_per_child"] =
+      fc.children > 0 ? static_cast<double>(fc.grid_nodes) / static_cast<double>(fc.children) : 0.0;
   long failed = 0;
   for (const auto& [word, count] : analysis_failures_) {
     sum.extra["analyses_failed_" + word] = static_cast<double>(count);
@@ -435,6 +473,9 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.extra["analyses_failed"] = static_cast<double>(failed);
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
+  // The part of all the solid that ever entered (initial grains and fed rocks) removed as fines.
+  const double entered = sum.mass_initial + mass_fed_;
+  sum.extra["fines_mass_fraction"] = entered > 0 ? removed_mass_ / entered : 0.0;
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
@@ -651,6 +692,10 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   ev.fragment_method = frag.method;
   ev.analysis = rec.analysis;
   fallbacks_ += frag.fallbacks;
+  fragment_counts_.grid_nodes += frag.grid_nodes;
+  fragment_counts_.children += static_cast<long>(frag.children.size());
+  fragment_counts_.refinements += frag.refinements;
+  fragment_counts_.absorbed += frag.absorbed;
   // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
   double vsum = frag.removed_volume;
   for (const auto& f : frag.children) vsum += f.shape->volume();
@@ -662,6 +707,11 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   std::vector<Grain> children = make_children(parent, frag, mat, ev);
   removed_volume_ += ev.removed_volume;
   removed_mass_ += ev.removed_volume * mat.density;
+  double& by_builder = frag.children.empty()       ? removed_by_path_.crushed
+                       : frag.children.size() == 1 ? removed_by_path_.chip
+                                                   : removed_by_path_.split_pieces;
+  by_builder += frag.removed_volume * mat.density;
+  removed_by_path_.fines_diameter += (ev.removed_volume - frag.removed_volume) * mat.density;
   engine_->replace_grain(parent.id, children);
   for (auto& c : children) added.push_back(std::move(c));
   ++events_;

@@ -38,6 +38,25 @@ struct SimulationSettings {
   GuardSettings guards;               // physical invariants (core/Guards.h)
 };
 
+// Mass taken out of the engine as fines (kg), by the path that took it (summary.json
+// mass_removed_<path>_kg; the paths sum to mass_removed_kg).
+struct RemovedMassByPath {
+  double crushed = 0;         // grains the builder removed whole (outcome crushed)
+  double chip = 0;            // pieces the builder removed when it kept one child (outcome chip)
+  double split_pieces = 0;    // pieces the builder removed from a split into two children or more
+  double fines_diameter = 0;  // children finer than simulation.fines_diameter
+  double guard = 0;           // small grains that left the container (guards)
+};
+
+// What the fragment builders made so far (summary.json fragment_grid_nodes_per_child,
+// fragment_refinements, fragment_pieces_absorbed).
+struct FragmentCounts {
+  long grid_nodes = 0;   // nodes of the children's grids
+  long children = 0;     // children built
+  long refinements = 0;  // splits repeated on a finer grid
+  long absorbed = 0;     // unresolved pieces merged into a kept child
+};
+
 // Everything besides the grains that a run needs to continue from a checkpoint. The
 // engine is rebuilt from the grains: contact history and solver warm starts start afresh,
 // and the platen starts at rest where it was.
@@ -47,6 +66,8 @@ struct SimulationState {
   double initial_height = 0;
   double platen_position = 0;
   double removed_volume = 0, removed_mass = 0;
+  RemovedMassByPath removed_by_path;
+  FragmentCounts fragment_counts;
   long events = 0, analyses = 0, fallbacks = 0, dt_reductions = 0;
   long analyses_skipped = 0;  // screened in but skipped by the skip rule (Screening.h)
   ScreeningCounts screened;   // grain checks per screening outcome
@@ -63,6 +84,16 @@ struct SimulationState {
   long small_grain_overlaps = 0;
   long small_grains_removed = 0;  // tiny grains that left the container, taken out as fines
   double guard_max_overlap_fraction = 0, guard_max_energy_ratio = 0;  // largest margins so far (summary.json)
+  // Breakage analyses or fragment builds that threw, by the error's leading word
+  // (summary.json: analyses_failed_<word>).
+  std::map<std::string, long> analysis_failures;
+  // Open scenes (core/OpenScene.h): rocks fed so far (the next one is the feed's rock number
+  // rocks_fed), their mass, and the product collected so far. The moving walls' pose follows
+  // from `time` (their motion is prescribed).
+  long rocks_fed = 0;
+  double mass_fed = 0;
+  std::vector<ProductGrain> product;
+  double product_mass = 0;
 };
 
 // Where the settling of a packing (scenarios/Packing.h) stands after a step: what a
@@ -139,14 +170,19 @@ class Simulation {
   double solid_volume() const;  // in the engine + removed fines
   double removed_volume() const { return removed_volume_; }
   double removed_mass() const { return removed_mass_; }  // kg, the fines taken out of the engine
+  const RemovedMassByPath& removed_by_path() const { return removed_by_path_; }
   RunState state() const;
   // Pull poses from the engine into grains() (observers that draw or measure call this).
   void sync_grains();
 
   // Physical guards (core/Guards.h), for code that steps the engine outside run() (packing
-  // settlement): account the platen's work over one step, and check every invariant now.
-  // Throws PhysicsGuardError.
-  void account_platen_work(double force, double travel) { energy_in_ += std::abs(force * travel); }
+  // settlement): account the energy one engine step put in, and check every invariant now.
+  // Throws PhysicsGuardError. The energy of a step: the platen's work (force × travel), and
+  // after the first step of the run (or of its settling) the elastic energy stored in the
+  // overlaps the grains were placed with (Engine::elastic_energy of that step's forces,
+  // evaluated at the initial poses): it is energy present at the start, which the engine
+  // turns into motion as it pushes the grains apart.
+  void account_step(double platen_force, double platen_travel);
   void check_guards(const char* phase, double dt, bool full);
   // Largest margins the guards have seen so far in this process.
   const GuardReading& guard_margins() const { return guard_max_; }
@@ -206,6 +242,9 @@ class Simulation {
   double dt_ = 0;
   double removed_volume_ = 0;
   double removed_mass_ = 0;
+  RemovedMassByPath removed_by_path_;
+  // The builders' cost figures (FragmentResult), counted per process like analysis failures.
+  FragmentCounts fragment_counts_;
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;
@@ -219,6 +258,7 @@ class Simulation {
   std::size_t initial_grains_ = 0;
   double initial_mass_ = 0, initial_void_ratio_ = 0;
   double energy_in_ = 0;
+  bool initial_elastic_counted_ = false;  // account_step counted the initial overlaps' energy
   double reference_diameter_ = 0;
   GuardReading guard_max_;
   // The engine's contact solver over this process's loading steps (Engine::solver_report).

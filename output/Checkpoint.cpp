@@ -1,5 +1,6 @@
 #include "output/Checkpoint.h"
 
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -101,6 +102,22 @@ Shape::Ptr shape_from_saved_config(const Config& sc, int dim) {
   return sh;
 }
 
+namespace {
+
+// What an open scene has fed and discharged so far; a product grain as
+// [id, origin, generation, time, volume, mass, diameter, sieve].
+Json open_scene_json(const SimulationState& st) {
+  Json product = Json::array();
+  for (const auto& p : st.product)
+    product.push_back({p.id, p.origin, p.generation, p.time, p.volume, p.mass, p.diameter, p.sieve});
+  return {{"rocks_fed", st.rocks_fed},
+          {"mass_fed", st.mass_fed},
+          {"product_mass", st.product_mass},
+          {"product", std::move(product)}};
+}
+
+}  // namespace
+
 Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& run_info, const SettleProgress* settling) {
   sim.sync_grains();
   const SimulationState st = sim.saved_state();
@@ -115,6 +132,15 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"platen_position", st.platen_position},
                 {"removed_volume", st.removed_volume},
                 {"removed_mass", st.removed_mass},
+                {"removed_mass_crushed", st.removed_by_path.crushed},
+                {"removed_mass_chip", st.removed_by_path.chip},
+                {"removed_mass_split_pieces", st.removed_by_path.split_pieces},
+                {"removed_mass_fines_diameter", st.removed_by_path.fines_diameter},
+                {"removed_mass_guard", st.removed_by_path.guard},
+                {"fragment_grid_nodes", st.fragment_counts.grid_nodes},
+                {"fragment_children", st.fragment_counts.children},
+                {"fragment_refinements", st.fragment_counts.refinements},
+                {"fragment_absorbed", st.fragment_counts.absorbed},
                 {"events", st.events},
                 {"analyses", st.analyses},
                 {"analyses_skipped", st.analyses_skipped},
@@ -134,6 +160,8 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"guard_max_overlap_fraction", st.guard_max_overlap_fraction},
                 {"guard_max_energy_ratio", st.guard_max_energy_ratio}};
   for (const auto& [reason, n] : st.screened.items()) j["state"][std::string("screened_") + reason] = n;
+  if (!st.analysis_failures.empty()) j["state"]["analyses_failed"] = st.analysis_failures;
+  if (sim.container().open || sim.feed().count > 0) j["state"]["open_scene"] = open_scene_json(st);
   // Shared shapes are written once.
   std::map<const Shape*, std::size_t> index;
   Json shapes = Json::array(), grains = Json::array();
@@ -178,6 +206,55 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
 
 namespace {
 
+// The product grains of a checkpoint's "open_scene" object (open_scene_json).
+std::vector<ProductGrain> read_product(const Config& oc) {
+  std::vector<ProductGrain> out;
+  const Json& pr = oc.raw("product");
+  const std::string form = "expected an array of [id, origin, generation, time, volume, mass, diameter, sieve]";
+  if (!pr.is_array()) oc.fail("product", form);
+  for (std::size_t k = 0; k < pr.size(); ++k) {
+    const Json& e = pr[k];
+    const std::string at = "product/" + std::to_string(k);
+    if (!e.is_array() || e.size() != 8) oc.fail(at, form);
+    for (int i = 0; i < 3; ++i)
+      if (!e[i].is_number_integer()) oc.fail(at, "id, origin and generation must be integers");
+    double v[5];
+    for (int i = 0; i < 5; ++i) {
+      if (!e[i + 3].is_number() || !std::isfinite(e[i + 3].get<double>()) || e[i + 3].get<double>() < 0)
+        oc.fail(at, "time, volume, mass, diameter and sieve must be finite numbers >= 0");
+      v[i] = e[i + 3].get<double>();
+    }
+    ProductGrain p;
+    p.id = e[0].get<GrainId>();
+    p.origin = e[1].get<GrainId>();
+    p.generation = e[2].get<int>();
+    p.time = v[0];
+    p.volume = v[1];
+    p.mass = v[2];
+    p.diameter = v[3];
+    p.sieve = v[4];
+    out.push_back(p);
+  }
+  return out;
+}
+
+// An open scene's feed and product, and the analyses that failed, into `st`.
+void read_scene_and_failures(const Config& s, SimulationState& st) {
+  if (s.has("open_scene")) {
+    const Config oc = s.required_child("open_scene");
+    st.rocks_fed = oc.integer("rocks_fed", 0, 0);
+    st.mass_fed = oc.number("mass_fed", 0, 0);
+    st.product_mass = oc.number("product_mass", 0, 0);
+    st.product = read_product(oc);
+  }
+  if (s.has("analyses_failed")) {
+    if (!s.is_object("analyses_failed")) s.fail("analyses_failed", "expected an object {reason: count}");
+    const Config fc = s.child("analyses_failed");
+    for (auto it = fc.doc().begin(); it != fc.doc().end(); ++it)
+      st.analysis_failures[it.key()] = fc.integer(it.key(), 0, 0);
+  }
+}
+
 // The loop state of a checkpoint's "state" object.
 SimulationState read_state(const Config& s) {
   SimulationState st;
@@ -187,6 +264,15 @@ SimulationState read_state(const Config& s) {
   st.platen_position = s.positive("platen_position");
   st.removed_volume = s.number("removed_volume", 0, 0);
   st.removed_mass = s.number("removed_mass", 0, 0);
+  st.removed_by_path.crushed = s.number("removed_mass_crushed", 0, 0);
+  st.removed_by_path.chip = s.number("removed_mass_chip", 0, 0);
+  st.removed_by_path.split_pieces = s.number("removed_mass_split_pieces", 0, 0);
+  st.removed_by_path.fines_diameter = s.number("removed_mass_fines_diameter", 0, 0);
+  st.removed_by_path.guard = s.number("removed_mass_guard", 0, 0);
+  st.fragment_counts.grid_nodes = s.integer("fragment_grid_nodes", 0, 0);
+  st.fragment_counts.children = s.integer("fragment_children", 0, 0);
+  st.fragment_counts.refinements = s.integer("fragment_refinements", 0, 0);
+  st.fragment_counts.absorbed = s.integer("fragment_absorbed", 0, 0);
   st.events = s.integer("events", 0, 0);
   st.analyses = s.integer("analyses", 0, 0);
   st.analyses_skipped = s.integer("analyses_skipped", 0, 0);
@@ -207,6 +293,7 @@ SimulationState read_state(const Config& s) {
   st.guard_max_energy_ratio = s.number("guard_max_energy_ratio", 0, 0);
   for (const auto& [reason, n] : ScreeningCounts{}.items())  // absent in older checkpoints: 0
     *st.screened.find(reason) = s.integer(std::string("screened_") + reason, 0, 0);
+  read_scene_and_failures(s, st);
   return st;
 }
 

@@ -1,8 +1,9 @@
 // Checkpoints of long runs (checkpoint.json in the output directory) and resuming from them
-// (`crumble run SCENARIO --out DIR --resume`). A checkpoint holds the loop's state, every
-// grain (shape, pose, velocities, strength, lineage) and, when the engine can save it
-// (Engine::save_state: lsdem), the engine's own state (contact history, half-step
-// velocities, platen motion), so that a resumed lsdem run is bit-identical to an
+// (`crumble run SCENARIO --out DIR --resume`). A checkpoint holds the loop's state (with an
+// open scene's feed count and the product collected so far), every grain (shape, pose,
+// velocities, strength, lineage) and, when the engine can save it (Engine::save_state:
+// lsdem), the engine's own state (contact history, half-step velocities, platen and moving
+// walls' motion), so that a resumed lsdem run is bit-identical to an
 // uninterrupted one. Other engines are rebuilt from the grains: their contact history and
 // solver warm starts begin afresh at the resume point (docs/scenarios.md, output). A
 // checkpoint written while the packing settles also holds where the settling stands.

@@ -328,6 +328,7 @@ PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double 
     rows_ += '\n';
     d_max_ = std::max(d_max_, std::atof(rows[i][2].c_str()));
   }
+  initial_kept_ = kept.count("initial") > 0;
   if (resume_step >= 0 && step_col >= 0) {
     // Levels are tabled in ascending order: the kept tables say which are done.
     while (next_ < levels_.size() && kept.count("level_" + fmt_num(levels_[next_]))) ++next_;
@@ -341,7 +342,9 @@ PsdWriter::PsdWriter(const std::string& dir, std::vector<double> levels, double 
 }
 
 void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
-  if (resumed_ && d_max_ > 0) return;
+  // The kept initial table holds the initial grains' sieves (all 0 for a scene that starts
+  // empty and is fed: a jaw crusher); without it, the grains at the resume give them.
+  if (resumed_ && (initial_kept_ || d_max_ > 0)) return;
   for (const auto& g : sim.grains()) d_max_ = std::max(d_max_, g.shape->equivalent_diameter());
   table(sim, s, "initial");
   write();  // on disk before any checkpoint, so a run killed early resumes with it
@@ -518,6 +521,9 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   // `output` by writer (Observer::name()): the parts sum to `output`.
   j["time_breakdown_s"]["output_by_writer"] = Json::object();
   for (const auto& [name, seconds] : s.timings.output_by_writer) j["time_breakdown_s"]["output_by_writer"][name] = seconds;
+  // Building the children and putting them into the engine, per breakage event.
+  j["time_breakdown_s"]["fragments_per_event"] =
+      s.breakage_events > 0 ? s.timings.fragments / static_cast<double>(s.breakage_events) : 0.0;
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)

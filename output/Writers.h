@@ -109,6 +109,7 @@ class PsdWriter : public Observer {
   std::string rows_;
   double d_max_ = 0;
   bool resumed_ = false;
+  bool initial_kept_ = false;  // a resumed run kept the earlier run's initial table
 };
 
 // Shape descriptors of one grain (geometry/ShapeMetrics.h): 2D circularity (Harmon et al.

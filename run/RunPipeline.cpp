@@ -408,12 +408,12 @@ bool resume_run(const RunRequest& req, Scenario& sc, RunStart& st) {
   Checkpoint cp = read_checkpoint(out + "/checkpoint.json", sc.name, sim.context().dimension);
   // An engine that saves its state gets the container as it was and its platen from the
   // state; the others are rebuilt with the platen at rest where it was.
-  Container c = sc.packing.container;
-  if (!cp.settling || cp.engine_state.is_null()) c.height = cp.state.platen_position;
+  // The moving walls and the feed of an open scene are the scenario's; their state at the
+  // checkpoint follows from its time, its feed count and (lsdem) the engine state.
+  PackingSpec spec = sc.packing;
+  if (!cp.settling || cp.engine_state.is_null()) spec.container.height = cp.state.platen_position;
+  place_packing(sim, spec, false);
   if (cp.settling) {
-    PackingSpec spec = sc.packing;
-    spec.container = c;
-    place_packing(sim, spec, false);
     take_packing_shapes(cp.grains, sc.packing, out + "/checkpoint.json");
     sim.restore_packing(cp.state, std::move(cp.grains));
     restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
@@ -423,10 +423,13 @@ bool resume_run(const RunRequest& req, Scenario& sc, RunStart& st) {
                 << sim.grains().size() << " grains)\n";
     return settle_and_write(req, sc, st, cp.settling);
   }
-  sim.set_container(c);
   st.resumed_step = cp.state.step;
   st.loading_resumed = true;
-  sim.resume(cp.state, std::move(cp.grains));
+  try {
+    sim.resume(cp.state, std::move(cp.grains));
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(out + "/checkpoint.json", e.what());
+  }
   restore_engine_state(sim.engine(), cp, out + "/checkpoint.json");
   // The settling of the run it continues (a run killed with SIGKILL left no summary.json).
   st.run_info = cp.run_info;

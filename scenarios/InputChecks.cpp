@@ -22,6 +22,12 @@ namespace {
 
 bool is_round(const Shape& s) { return s.kind() == ShapeKind::Sphere || s.kind() == ShapeKind::Disk; }
 
+// Beyond the tolerance by more than rounding: a grain placed exactly at it (an overlap of
+// 1 % of the diameter, from positions and a diameter that are not exact in binary) is
+// accepted. 1e-9 relative is far above the rounding of either side and far below any
+// physical difference.
+bool beyond(double value, double slack) { return value > slack * (1 + 1e-9); }
+
 // Points on the surface of a grain (world frame): mesh vertices and triangle centroids in
 // 3D, outline vertices and edge midpoints in 2D (vertices alone miss two flat faces pressed
 // into each other).
@@ -74,19 +80,21 @@ void check_explicit_grains(const PackingSpec& spec, int dim, double tol) {
         }
     }
     auto outside = [&](const std::string& what, double by) {
+      const auto [by_text, slack_text] = fmt_apart(by, slack);
       throw ConfigError(g.source + "/position",
                         "grain " + std::to_string(i) + " (" + g.shape->describe() + ", equivalent diameter " +
                             fmt_num(d) + " m) at [" + fmt_num(g.position.x) + ", " + fmt_num(g.position.y) +
-                            (dim == 3 ? ", " + fmt_num(g.position.z) : std::string()) + "] reaches " + fmt_num(by) +
-                            " m " + what + " (tolerance " + fmt_num(slack) + " m = " + fmt_num(100 * tol) +
+                            (dim == 3 ? ", " + fmt_num(g.position.z) : std::string()) + "] reaches " + by_text +
+                            " m " + what + " (tolerance " + slack_text + " m = " + fmt_num(100 * tol) +
                             " % of its diameter); move it inside the container or enlarge /container");
     };
-    if (lo.x < -slack) outside("beyond the wall x = 0", -lo.x);
-    if (hi.x > c.lx + slack) outside("beyond the wall x = container.lx = " + fmt_num(c.lx) + " m", hi.x - c.lx);
-    if (dim == 3 && lo.y < -slack) outside("beyond the wall y = 0", -lo.y);
-    if (dim == 3 && hi.y > c.ly + slack) outside("beyond the wall y = container.ly = " + fmt_num(c.ly) + " m", hi.y - c.ly);
-    if (lo[up] < -slack) outside("below the floor", -lo[up]);
-    if (hi[up] > c.height + slack)
+    if (beyond(-lo.x, slack)) outside("beyond the wall x = 0", -lo.x);
+    if (beyond(hi.x - c.lx, slack)) outside("beyond the wall x = container.lx = " + fmt_num(c.lx) + " m", hi.x - c.lx);
+    if (dim == 3 && beyond(-lo.y, slack)) outside("beyond the wall y = 0", -lo.y);
+    if (dim == 3 && beyond(hi.y - c.ly, slack))
+      outside("beyond the wall y = container.ly = " + fmt_num(c.ly) + " m", hi.y - c.ly);
+    if (beyond(-lo[up], slack)) outside("below the floor", -lo[up]);
+    if (beyond(hi[up] - c.height, slack))
       outside("above the platen at container.height = " + fmt_num(c.height) + " m", hi[up] - c.height);
   }
   // Pairs: bounding spheres first, then the exact test.
@@ -107,11 +115,12 @@ void check_explicit_grains(const PackingSpec& spec, int dim, double tol) {
         if (pts[j].empty()) pts[j] = surface_points(b);
         overlap = std::max(depth_into(a, pts[i], b), depth_into(b, pts[j], a));
       }
-      if (overlap > slack)
-        throw ConfigError(b.source + "/position",
-                          "grain " + std::to_string(j) + " overlaps grain " + std::to_string(i) + " (" + a.source +
-                              ") by " + fmt_num(overlap) + " m, more than the tolerance " + fmt_num(slack) + " m (" +
-                              fmt_num(100 * tol) + " % of the smaller diameter); move the grains apart");
+      if (!beyond(overlap, slack)) continue;
+      const auto [overlap_text, slack_text] = fmt_apart(overlap, slack);
+      throw ConfigError(b.source + "/position",
+                        "grain " + std::to_string(j) + " overlaps grain " + std::to_string(i) + " (" + a.source +
+                            ") by " + overlap_text + " m, more than the tolerance " + slack_text + " m (" +
+                            fmt_num(100 * tol) + " % of the smaller diameter); move the grains apart");
     }
   }
 }

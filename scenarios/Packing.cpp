@@ -362,7 +362,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
     const double z0 = e.platen_position();
     e.step(p.dt);
     ++p.steps;
-    sim.account_platen_work(e.platen_force(), e.platen_position() - z0);
+    sim.account_step(e.platen_force(), e.platen_position() - z0);
     sim.check_guards("settling", p.dt, p.steps % guard_every == 0);
     if (p.steps % window == 0) {
       const double z = e.platen_position();

@@ -248,20 +248,13 @@ LoadingSettings loading_from(const Config& root, const PackingSpec& packing, con
   return ls;
 }
 
-OutputSettings output_from(const Config& root, const PackingSpec& packing) {
+OutputSettings output_from(const Config& root) {
   Config oc = root.child("output");
-  // Scenes with moving walls or a feed cannot be checkpointed: their default is 0, and a value is refused.
-  const bool open_scene = !packing.walls.empty() || packing.feed.count > 0;
-  if (open_scene && !oc.has("checkpoint_every_s")) oc.number("checkpoint_every_s", 0.0);
   OutputSettings out;
   read_options(oc, output_options(), out);
   for (std::size_t i = 0; i < out.psd_at_strain.size(); ++i)
     if (!(out.psd_at_strain[i] > 0 && out.psd_at_strain[i] < 1))
       oc.fail("psd_at_strain/" + std::to_string(i), "expected an axial strain in (0, 1), e.g. 0.05");
-  const std::string refused = "checkpoints do not record moving walls, the feed or the product yet: set it to 0 "
-                              "for scenarios with walls or a jaw_crusher scene";
-  if (open_scene && out.checkpoint_every > 0) oc.fail("checkpoint_every", refused);
-  if (open_scene && out.checkpoint_every_s > 0) oc.fail("checkpoint_every_s", refused);
   return out;
 }
 
@@ -280,6 +273,7 @@ EngineContext context_from(const Config& root, Json& doc, const BuildOptions& op
   ctx.materials = materials_from(root);
   ctx.threads = sc.threads;
   ctx.seed = sc.seed;
+  ctx.fines_diameter = read_options<SimulationSettings>(root.child("simulation"), simulation_options()).fines_diameter;
   return ctx;
 }
 
@@ -308,7 +302,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   read_options(root.child("schedule"), schedule_options(), sch);
   ScreeningSettings scr = im.model->default_screening();
   read_options(root.child("screening"), screening_options(), scr);
-  sc.output = output_from(root, sc.packing);
+  sc.output = output_from(root);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
 
   root.check_unknown();

@@ -261,8 +261,7 @@ const OptionTable& output_options() {
                           "N > 0: psd_layers.csv, sieve curves of N layers of the initial packing (Liu et al. 2019 "
                           "§4.3.3); 0 = none"),
              opt::number("checkpoint_every_s", &S::checkpoint_every_s, 0, kInf, "s",
-                         "wall-time seconds between writes of checkpoint.json; 0 = none; 0 and refused otherwise for "
-                         "scenes with moving walls or a feed, which checkpoints do not record"),
+                         "wall-time seconds between writes of checkpoint.json; 0 = none"),
          })
       o.push_back(std::move(v));
     return o;

@@ -555,6 +555,24 @@ std::vector<std::string> compare_header(const CompareRequest& req, const Json& b
   return header;
 }
 
+// Waits for the child `pid` and returns its wait status. A stop request (SIGINT/SIGTERM
+// sent to this process alone) is forwarded to it once, so that it stops as a run does
+// (a settling packing writes its checkpoint and ends) instead of running to its end.
+int wait_forwarding_stop(pid_t pid) {
+  bool forwarded = false;
+  for (;;) {
+    int st = 0;
+    const pid_t r = waitpid(pid, &st, WNOHANG);
+    if (r == pid) return st;
+    if (r < 0 && errno != EINTR) return W_EXITCODE(1, 0);  // the child is lost: a failed stage
+    if (stop_requested() && !forwarded) {
+      kill(pid, received_signal() ? received_signal() : SIGTERM);
+      forwarded = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+}
+
 // The packing, once, in DIR/packing (each combination loads DIR/packing.json, no settling of
 // its own). Returns the stage's exit status; on success sets the packing file and hash and
 // adds a line to the header.
@@ -569,9 +587,7 @@ int build_shared_packing(const CompareRequest& req, const RunRequest& base, cons
   p.quiet = false;
   if (!req.quiet) std::cerr << "crumble: " << req.command << ": building the packing (log " << (logs / "packing.log").string() << ")\n";
   const pid_t pid = spawn(p, (logs / "packing.log").string());
-  int st = 0;
-  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
-  }
+  const int st = wait_forwarding_stop(pid);
   const int code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
   if (code != 0) {
     const std::string why = reason_from_log((logs / "packing.log").string());

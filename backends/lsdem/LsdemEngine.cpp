@@ -58,6 +58,7 @@ struct LsdemEngine::Item {
   Vec3 point, normal;
   double fsum = 0;
   double overlap = 0;  // deepest node penetration (m)
+  double elastic = 0;  // energy in the normal spring (J; 2D: J/m)
   bool contact = false;
   long queries = 0, pen = 0, tree_queries = 0;
 };
@@ -447,6 +448,8 @@ void patch_forces(std::vector<PenNode>& P, const Law& L, const Body& A, const Bo
     out.normal += n.n * fn;
   }
   out.overlap = delta;
+  // The normal spring's energy, ∫F_n dδ: ½·k_n·δ² (linear), (2/5)·k·δ^(5/2) (Hertz).
+  out.elastic = (L.hertz ? 0.4 : 0.5) * Fn * delta;
   out.contact = true;
 }
 
@@ -856,6 +859,7 @@ void LsdemEngine::reduce_forces(const std::vector<Wall>& W, std::size_t npairs) 
   floor_force_ = 0;
   container_wall_force_.fill(0.0);
   for (auto& f : shape_wall_force_) f = {};
+  elastic_energy_ = 0;
   long pairs_in_contact = 0, queries = 0, wall_checks = 0, pen = 0, tree = 0;
   for (std::size_t k = 0; k < items_.size(); ++k) {
     const Item& it = items_[k];
@@ -864,6 +868,7 @@ void LsdemEngine::reduce_forces(const std::vector<Wall>& W, std::size_t npairs) 
     pen += it.pen;
     tree += it.tree_queries;
     if (!it.contact) continue;
+    elastic_energy_ += it.elastic;
     if (apply_contact(it, W)) ++pairs_in_contact;
   }
   // States of grain–wall contacts that no longer overlap go.
@@ -966,7 +971,6 @@ void LsdemEngine::integrate(double dt) {
 
 bool LsdemEngine::save_state(nlohmann::json& out) const {
   using J = nlohmann::json;
-  if (!walls_kin_.empty()) return false;
   // nlohmann writes the shortest decimal that reads back to the same double, so every
   // value below round-trips bit for bit.
   J bodies = J::array();
@@ -998,6 +1002,18 @@ bool LsdemEngine::save_state(nlohmann::json& out) const {
           {"floor_force", floor_force_},
           {"bodies", bodies},
           {"pairs", ps}};
+  // Shape walls: the pose they were integrated to, their motion over the last step and the
+  // grains' force on them (the Simulation's energy bookkeeping reads it before the next step).
+  if (!walls_kin_.empty()) {
+    J walls = J::array();
+    for (std::size_t k = 0; k < walls_kin_.size(); ++k) {
+      const Body& b = walls_kin_[k];
+      const Vec3& f = shape_wall_force_[k];
+      walls.push_back(J::array({b.x.x, b.x.y, b.x.z, b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z, b.q.w, b.q.x, b.q.y,
+                                b.q.z, b.moved, b.turned, f.x, f.y, f.z}));
+    }
+    out["walls"] = std::move(walls);
+  }
   return true;
 }
 
@@ -1045,6 +1061,28 @@ void read_body(const LsdemEngine::StateReader& rd, const nlohmann::json& r, Lsde
 }
 
 }  // namespace
+
+std::vector<std::pair<LsdemEngine::Body, Vec3>> LsdemEngine::read_walls(StateReader& rd, const nlohmann::json& j) const {
+  rd.at = "walls";
+  static const nlohmann::json none = nlohmann::json::array();
+  const nlohmann::json& jw = j.contains("walls") ? j.at("walls") : none;
+  if (!jw.is_array() || jw.size() != walls_kin_.size())
+    rd.fail("expected " + std::to_string(walls_kin_.size()) + " shape walls (the scenario's moving walls), got " +
+            std::to_string(jw.is_array() ? jw.size() : 0));
+  std::vector<std::pair<Body, Vec3>> out;
+  for (std::size_t k = 0; k < jw.size(); ++k) {
+    rd.at = "walls/" + std::to_string(k);
+    const nlohmann::json& r = jw[k];
+    if (!r.is_array() || r.size() != 18) rd.fail("expected [x(3), v(3), w(3), q(4), moved, turned, force(3)]");
+    // read_body reads [id, x(3), …, turned]: the wall's row without an id, then its force.
+    nlohmann::json row = nlohmann::json::array({0});
+    for (std::size_t i = 0; i < 15; ++i) row.push_back(r[i]);
+    Body b = walls_kin_[k];
+    read_body(rd, row, b);
+    out.emplace_back(b, Vec3{rd.num(r[15]), rd.num(r[16]), rd.num(r[17])});
+  }
+  return out;
+}
 
 std::vector<LsdemEngine::Body> LsdemEngine::read_bodies(StateReader& rd, const nlohmann::json& jb) const {
   if (!jb.is_array() || jb.size() != bodies_.size())
@@ -1103,8 +1141,8 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
   if (!rd.field(j, "engine").is_string() || j.at("engine").get<std::string>() != "lsdem")
     rd.fail("written by engine " + j.at("engine").dump() + ", not lsdem");
   if (rd.integer(rd.field(j, "version")) != 1) rd.fail("unknown version " + j.at("version").dump());
-  if (!walls_kin_.empty()) rd.fail("an engine with shape walls cannot be restored");
   std::vector<Body> order = read_bodies(rd, rd.field(j, "bodies"));
+  const std::vector<std::pair<Body, Vec3>> walls = read_walls(rd, j);
   rd.at = "pairs";
   const J& jp = rd.field(j, "pairs");
   if (!jp.is_array()) rd.fail("expected an array");
@@ -1135,6 +1173,10 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
   platen_.sync(z, vz);
   platen_force_ = pf;
   floor_force_ = ff;
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    walls_kin_[k] = walls[k].first;
+    shape_wall_force_[k] = walls[k].second;
+  }
 }
 
 // ---- Factory and benchmark ----

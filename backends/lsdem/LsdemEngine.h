@@ -159,9 +159,8 @@ class LsdemEngine final : public Engine {
 
   // Checkpoints: body states (positions, half-step velocities, exact quaternions, the last
   // step's motion bounds), every pair's tangential history and candidate nodes, the step
-  // stamp, the platen's position and velocity and the forces last measured. Pairs are
-  // written sorted by key, so equal states give equal files. Not with shape walls (open
-  // scenes are not checkpointed).
+  // stamp, the platen's position and velocity, the shape walls' poses and motion, and the
+  // forces last measured. Pairs are written sorted by key, so equal states give equal files.
   bool save_state(nlohmann::json& out) const override;
   void restore_state(const nlohmann::json& state) override;
 
@@ -171,6 +170,8 @@ class LsdemEngine final : public Engine {
   void set_threads(int n) { s_.threads = n < 1 ? 1 : n; }
   // Kinetic energy (J; 2D: per metre) of the grains, translational + rotational.
   double kinetic_energy() const;
+  // The normal springs' energy at the last force evaluation (Engine::elastic_energy).
+  double elastic_energy() const override { return elastic_energy_; }
 
   struct ShapeData;
   struct Body;
@@ -250,10 +251,13 @@ class LsdemEngine final : public Engine {
   // restore_state's readers: the saved bodies in their saved order, one pair's state.
   std::vector<Body> read_bodies(StateReader& reader, const nlohmann::json& bodies) const;
   std::pair<std::pair<GrainId, GrainId>, PairState> read_pair(const StateReader& reader, const nlohmann::json& pair) const;
+  // The saved shape walls (absent: none), each with the grains' force on it.
+  std::vector<std::pair<Body, Vec3>> read_walls(StateReader& reader, const nlohmann::json& state) const;
   std::vector<Item> items_;
   std::vector<Contact> contacts_;
   PlatenDriver platen_;  // the shared platen rules (core/Platen.h), integrated here explicitly
   double platen_force_ = 0, floor_force_ = 0;
+  double elastic_energy_ = 0;  // J (2D: J/m), summed over the last step's contacts
   std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
   LsdemStats stats_;

@@ -482,3 +482,84 @@ TEST(Resume, KilledBeforeTheFirstCheckpointSaysSo) {
   EXPECT_EQ(e.status, 2) << e.output;
   EXPECT_NE(e.output.find("the folder holds no run"), std::string::npos) << e.output;
 }
+
+// The jaw crusher (an open scene: rocks fed one after another, a swing jaw on its eccentric,
+// product leaving through the discharge) is checkpointed like a closed packing: the feed count,
+// the product collected so far, the lsdem engine state with the walls' poses, motion and
+// forces. A shortened run (6 cycles, 4 rocks wider than the closed side setting, so that some
+// break) killed with SIGKILL at a seeded random step after its first product grain and
+// resumed writes the same product_psd.csv and product.csv, byte for byte, and every other file
+// but for wall times.
+TEST(Resume, JawCrusherResumedAfterSigkillGivesTheSameProduct) {
+  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / "jaw";
+  const fs::path whole = base / "whole", killed = base / "killed";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/jaw_crusher_2d_quick.json";
+  // About 710000 steps; the first product grain leaves at step ≈ 412500, and the time step
+  // is reduced to the engine's stable step from step ≈ 522000 on.
+  const std::string sets =
+      " --quiet --threads 1 --set scene.cycles=6 --set scene.rocks.count=4 --set 'scene.rocks.diameter=[0.06,0.1]'"
+      " --set output.checkpoint_every=20000 --set output.checkpoint_every_s=0 --set output.plots=false";
+  const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
+  ASSERT_EQ(a.status, 0) << a.output;
+  const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
+  ASSERT_EQ(sa["rocks_fed"].get<double>(), 4);
+  ASSERT_GE(sa["product_grains"].get<double>(), 3);
+  ASSERT_GT(sa["breakage_events"].get<long>(), 0);
+  ASSERT_GT(sa["steps"].get<long>(), 680000);
+  std::mt19937 rng(20261204);
+  const long kill_step = std::uniform_int_distribution<long>(480000, 660000)(rng);
+  run_and_kill(std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + killed.string() + sets, killed, kill_step);
+  ASSERT_TRUE(fs::exists(killed / "checkpoint.json")) << "kill step " << kill_step;
+  ASSERT_FALSE(fs::exists(killed / "summary.json")) << "the run ended before it was killed (kill step " << kill_step << ")";
+  {
+    // What the run is resumed from: rocks fed, product collected, the walls in the engine state.
+    const auto cp = nlohmann::json::parse(slurp(killed / "checkpoint.json"));
+    ASSERT_TRUE(cp["state"].contains("open_scene")) << "kill step " << kill_step;
+    EXPECT_GE(cp["state"]["open_scene"]["rocks_fed"].get<long>(), 1);
+    EXPECT_FALSE(cp["state"]["open_scene"]["product"].empty()) << "kill step " << kill_step;
+    ASSERT_TRUE(cp.contains("engine_state"));
+    EXPECT_EQ(cp["engine_state"]["walls"].size(), 4u);  // the fixed and the swing jaw, the hopper's two sides
+  }
+  const auto b = run_cli("run " + scen + " --out " + killed.string() + sets + " --resume");
+  ASSERT_EQ(b.status, 0) << b.output;
+  const auto sb = nlohmann::json::parse(slurp(killed / "summary.json"));
+  EXPECT_GE(sb["resumed_from_step"].get<long>(), 460000);
+  EXPECT_TRUE(slurp(whole / "product_psd.csv") == slurp(killed / "product_psd.csv")) << "kill step " << kill_step;
+  EXPECT_TRUE(slurp(whole / "product.csv") == slurp(killed / "product.csv")) << "kill step " << kill_step;
+  ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;
+  for (const auto& f : files_under(whole)) {
+    if (f == "summary.json" || f == "events.csv" || f == "stages.csv") continue;
+    EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (kill step " << kill_step << ")";
+  }
+  EXPECT_EQ(without_columns(slurp(whole / "events.csv"), {"wall_ms"}),
+            without_columns(slurp(killed / "events.csv"), {"wall_ms"}))
+      << "kill step " << kill_step;
+  EXPECT_EQ(summary_but_process(whole / "summary.json"), summary_but_process(killed / "summary.json"));
+}
+
+// An open scene's part of a checkpoint that does not fit the scene is refused with its JSON
+// path: more rocks fed than the scene feeds, a product grain that is not eight numbers.
+TEST(Resume, MalformedOpenSceneIsAConfigError) {
+  const fs::path out = fs::temp_directory_path() / "crumble_resume_test" / "bad_open_scene";
+  fs::remove_all(out);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/jaw_crusher_2d_quick.json";
+  const std::string sets = " --quiet --set scene.cycles=1 --set scene.rocks.count=2 --set output.checkpoint_every=20000"
+                           " --set output.plots=false";
+  ASSERT_EQ(run_cli("run " + scen + " --out " + out.string() + sets).status, 0);
+  const auto good = nlohmann::json::parse(slurp(out / "checkpoint.json"));
+  ASSERT_TRUE(good["state"].contains("open_scene"));
+  const std::vector<std::pair<std::string, nlohmann::json>> bad = {
+      {"rocks_fed", 3}, {"product", nlohmann::json::parse(R"([[1, 0, 0, 0.1, 1e-3, 2.6]])")},
+      {"product", nlohmann::json::parse(R"([[1, 0, 0, 0.1, 1e-3, 2.6, 0.05, "x"]])")}, {"mass_fed", -1}};
+  for (const auto& [key, value] : bad) {
+    auto cp = good;
+    cp["state"]["open_scene"][key] = value;
+    std::ofstream(out / "checkpoint.json") << cp.dump();
+    const auto r = run_cli("run " + scen + " --out " + out.string() + sets + " --resume");
+    EXPECT_EQ(r.status, 2) << key << " = " << value.dump() << "\n" << r.output;
+    EXPECT_NE(r.output.find(key == "rocks_fed" ? "rocks fed" : "/state/open_scene/" + key), std::string::npos)
+        << r.output;
+  }
+}

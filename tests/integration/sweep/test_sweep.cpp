@@ -147,3 +147,26 @@ TEST(Sweep, BadInputIsExit2BeforeAnythingRuns) {
     EXPECT_FALSE(fs::exists(out)) << "written before the check";
   }
 }
+
+// SIGTERM sent to `crumble sweep` alone while its packing stage settles reaches the packing
+// child: the settling stops (no packing.json, its log says so) and the sweep ends interrupted
+// (143) without starting any setting. The settling does not converge (tolerance 1e-12) and would
+// run for packing.settle.max_time otherwise (about 20 s), and write packing.json at its end.
+TEST(Sweep, SigtermDuringThePackingStageStopsIt) {
+  const fs::path out = test_dir() / "out";
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  const std::string cmd = std::string(CRUMBLE_BINARY) + " sweep " + scen + " --out " + out.string() +
+                          " --param loading.max_stress --values 5e5,1e6 --threads 1 --quiet"
+                          " --set packing.settle.tolerance=1e-12 --set packing.settle.max_time=2";
+  // Signalled once the packing child has begun (its effective_scenario.json is written just
+  // before its packing is built and settled), and a moment later, so that it is settling.
+  const fs::path started = out / "packing" / "effective_scenario.json";
+  const auto r = run_cli("--version >/dev/null; " + cmd + " >/dev/null 2>&1 & p=$!; for i in $(seq 1 6000); do [ -f " +
+                         started.string() + " ] && break; kill -0 $p 2>/dev/null || break; sleep 0.01; done; sleep 1;"
+                         " kill -TERM $p; wait $p; echo \"sweep status $?\"");
+  EXPECT_NE(r.output.find("sweep status 143"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "packing" / "packing.json")) << "the packing stage ran to its end";
+  const std::string log = slurp(out / "logs" / "packing.log");
+  EXPECT_NE(log.find("interrupted while the packing settled"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(out / "sweep.csv"));
+}

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "core/Simulation.h"
+#include "output/Checkpoint.h"
 #include "output/VtkWriter.h"
 #include "output/Writers.h"
 
@@ -205,6 +206,10 @@ TEST(SimulationLoop, FinesLeaveTheEngineButStayInTheBudget) {
   EXPECT_GT(r.sum.mass_removed, 0);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
   for (const auto& g : r.grains) EXPECT_GE(g.shape->equivalent_diameter(), 1.05e-3);
+  // All of it went through simulation.fines_diameter (summary.json mass_removed_<path>_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_fines_diameter_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_chip_kg"), 0);
+  EXPECT_NEAR(r.sum.extra.at("fines_mass_fraction"), r.sum.mass_removed / r.sum.mass_initial, 1e-12);
 }
 
 // A builder's removed pieces (one child + removed volume, e.g. a level-set sliver thinner
@@ -216,6 +221,10 @@ TEST(SimulationLoop, BuilderRemovedVolumeCountsAsRemovedMass) {
   const double rho = Material{}.density, V = 4.0 / 3 * kPi * 1e-9;
   EXPECT_NEAR(r.sum.mass_removed, 8 * 0.125 * V * rho, 1e-9 * r.sum.mass_initial);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
+  // One child and removed pieces: the chip path (summary.json mass_removed_chip_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_chip_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_split_pieces_kg"), 0);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_fines_diameter_kg"), 0);
 }
 
 TEST(SimulationLoop, ResultsDoNotDependOnThreads) {
@@ -651,4 +660,38 @@ TEST(SimulationLoop, AFailedAnalysisLeavesTheGrainIntactAndIsCounted) {
   EXPECT_EQ(rec->failed, 3 + on_grain_2);
   EXPECT_EQ(sum.grains_final, 8u + 7u);
   EXPECT_NEAR(sum.mass_final + sum.mass_removed, sum.mass_initial, 1e-12 * sum.mass_initial);
+}
+
+// The failure counters are part of a checkpoint: a run resumed from it (here, from the
+// checkpoint at the end of a run with failures, by models that no longer fail) reports the
+// failures of the run it continues, analyses_failed and analyses_failed_<word>.
+TEST(SimulationLoop, FailedAnalysisCountsSurviveACheckpoint) {
+  class FailsOnGrain2 : public ThresholdModel {
+   public:
+    BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> cs) const override {
+      if (g.id == 2) throw std::invalid_argument("degenerate shape: no lattice");
+      return ThresholdModel::analyse(g, m, cs);
+    }
+  };
+  EngineContext ctx;
+  SqueezeSetup u = squeeze_setup();
+  Simulation a(std::make_unique<SqueezeEngine>(), std::make_unique<FailsOnGrain2>(), std::make_unique<EighthBuilder>(),
+               ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  a.set_container({0.01, 0.01, 0.01, 0});
+  add_spheres(a, 8, 1e-3);
+  const RunSummary sa = a.run();
+  const double failed = sa.extra.at("analyses_failed_degenerate_shape");
+  ASSERT_GE(failed, 1);
+  const auto dir = std::filesystem::temp_directory_path() / "crumble_simulation_loop" / "failures";
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  write_file_atomic(file, checkpoint_json(a, "squeeze").dump());
+  const Checkpoint cp = read_checkpoint(file, "squeeze", 3);
+  Simulation b(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(), std::make_unique<EighthBuilder>(),
+               ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  b.set_container({0.01, 0.01, 0.01, 0});
+  b.resume(cp.state, cp.grains);
+  const RunSummary sb = b.run();
+  EXPECT_EQ(sb.extra.at("analyses_failed_degenerate_shape"), failed);
+  EXPECT_EQ(sb.extra.at("analyses_failed"), sa.extra.at("analyses_failed"));
 }
