@@ -40,6 +40,9 @@ struct EngineContext {
   std::vector<Material> materials{Material{}};
   int threads = 1;
   std::uint64_t seed = 1;
+  // m: simulation.fines_diameter, the size below which children leave the run (a fragment
+  // builder that refines its resolution need not resolve pieces finer than this).
+  double fines_diameter = 0;
 };
 
 class Engine {

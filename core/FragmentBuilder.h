@@ -22,6 +22,13 @@ struct FragmentResult {
   // Volume of pieces the builder dropped (e.g. level-set pieces thinner than a grid cell):
   // counted as removed mass (fines), never lost. 0 children and 0 removed = no split.
   double removed_volume = 0;
+  // Cost figures of resolution-refining builders (summary.json fragment_grid_nodes_per_child,
+  // fragment_refinements): nodes of the children's grids, splits repeated on a finer grid.
+  long grid_nodes = 0;
+  int refinements = 0;
+  // Pieces too small to resolve that the builder gave to a kept child instead of removing
+  // (summary.json fragment_pieces_absorbed).
+  int absorbed = 0;
 };
 
 class FragmentBuilder {

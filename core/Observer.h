@@ -59,6 +59,9 @@ struct Timings {
   // loop: the rest of the loading loop's wall time (platen command, state read-out, scalar
   // checks, breakage schedule): what the simulation loop adds to the engine's own stepping.
   double loop = 0;
+  // observers by Observer::name(): their seconds sum to `observers` (summary.json
+  // time_breakdown_s.output_by_writer). Filled at the end of Simulation::run().
+  std::map<std::string, double> output_by_writer;
 };
 
 struct RunSummary {
@@ -80,6 +83,9 @@ struct RunSummary {
 class Observer {
  public:
   virtual ~Observer() = default;
+  // The key of its seconds in summary.json time_breakdown_s.output_by_writer (observers of
+  // one name are summed).
+  virtual std::string name() const { return "other"; }
   virtual void on_start(const Simulation&, const RunState&) {}
   virtual void on_sample(const Simulation&, const RunState&) {}
   virtual void on_analysis(const Simulation&, const AnalysisRecord&) {}

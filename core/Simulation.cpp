@@ -79,7 +79,27 @@ GrainId Simulation::add_grain(Grain g) {
   return grains_.back().id;
 }
 
-void Simulation::add_observer(std::shared_ptr<Observer> o) { observers_.push_back(std::move(o)); }
+void Simulation::add_observer(std::shared_ptr<Observer> o) {
+  observers_.push_back(std::move(o));
+  observer_seconds_.push_back(0.0);
+}
+
+template <class F>
+void Simulation::notify(F&& call) {
+  for (std::size_t i = 0; i < observers_.size(); ++i) {
+    const auto t0 = Clock::now();
+    call(*observers_[i]);
+    const double dt = seconds_since(t0);
+    observer_seconds_[i] += dt;
+    timings_.observers += dt;
+  }
+}
+
+void Simulation::tally_output() {
+  timings_.output_by_writer.clear();
+  for (std::size_t i = 0; i < observers_.size(); ++i)
+    timings_.output_by_writer[observers_[i]->name()] += observer_seconds_[i];
+}
 
 SimulationState Simulation::saved_state() const {
   SimulationState s = resumed_ ? resumed_from_ : SimulationState{};
@@ -89,6 +109,8 @@ SimulationState Simulation::saved_state() const {
   s.platen_position = engine_->platen_position();
   s.removed_volume = removed_volume_;
   s.removed_mass = removed_mass_;
+  s.removed_by_path = removed_by_path_;
+  s.fragment_counts = fragment_counts_;
   s.events = events_;
   s.analyses = analyses_;
   s.analyses_skipped = analyses_skipped_;
@@ -146,6 +168,8 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   initial_height_ = st.initial_height;
   removed_volume_ = st.removed_volume;
   removed_mass_ = st.removed_mass;
+  removed_by_path_ = st.removed_by_path;
+  fragment_counts_ = st.fragment_counts;
   events_ = st.events;
   analyses_ = st.analyses;
   analyses_skipped_ = st.analyses_skipped;
@@ -242,6 +266,7 @@ void Simulation::remove_escaped(const std::vector<GrainId>& ids) {
     engine_->remove_grain(g.id);
     removed_volume_ += g.shape->volume();
     removed_mass_ += g.mass(ctx_.materials[g.material].density);
+    removed_by_path_.guard += g.mass(ctx_.materials[g.material].density);
     ++guard_max_.small_grains_removed;
     gone[i] = 1;
   }
@@ -303,11 +328,8 @@ RunSummary Simulation::run(const Progress& progress) {
       check_breakage(st);
       st = state();
     }
-    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0) {
-      const auto t0 = Clock::now();
-      for (auto& o : observers_) o->on_sample(*this, st);
-      timings_.observers += seconds_since(t0);
-    }
+    if (settings_.sample_every > 0 && step_ % settings_.sample_every == 0)
+      notify([&](Observer& o) { o.on_sample(*this, st); });
     if (progress && seconds_since(last_progress) > 1.0) {
       last_progress = Clock::now();
       progress(st, loading_.progress(time_, st.platen_stress, st.axial_strain));
@@ -329,12 +351,11 @@ RunSummary Simulation::run(const Progress& progress) {
   }
   check_guards("loading", dt_, true);
   st = state();
-  for (auto& o : observers_) o->on_sample(*this, st);
+  notify([&](Observer& o) { o.on_sample(*this, st); });
   sync_grains();
   fill_summary(sum, st);
-  auto t0 = Clock::now();
-  for (auto& o : observers_) o->on_finish(*this, st, sum);
-  timings_.observers += seconds_since(t0);
+  notify([&](Observer& o) { o.on_finish(*this, st, sum); });
+  tally_output();
   sum.timings = timings_;
   sum.wall_seconds = seconds_since(t_start);
   return sum;
@@ -360,7 +381,7 @@ RunState Simulation::start_run(RunSummary& sum) {
   initial_mass_ = sum.mass_initial;
   initial_void_ratio_ = sum.void_ratio_initial;
   sum.max_platen_stress = max_platen_stress_;
-  for (auto& o : observers_) o->on_start(*this, st);
+  notify([&](Observer& o) { o.on_start(*this, st); });
 
   dt_ = time_step(0);
   const double bound = engine_->max_stable_dt();
@@ -428,12 +449,22 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.grains_final = grains_.size();
   for (const auto& g : grains_) sum.mass_final += g.mass(ctx_.materials[g.material].density);
   sum.mass_removed = removed_mass_;
+  sum.extra["mass_removed_crushed_kg"] = removed_by_path_.crushed;
+  sum.extra["mass_removed_chip_kg"] = removed_by_path_.chip;
+  sum.extra["mass_removed_split_pieces_kg"] = removed_by_path_.split_pieces;
+  sum.extra["mass_removed_fines_diameter_kg"] = removed_by_path_.fines_diameter;
+  sum.extra["mass_removed_guard_kg"] = removed_by_path_.guard;
   sum.void_ratio_final = st.void_ratio;
   sum.breakage_events = events_;
   sum.analyses = analyses_;
   sum.analyses_skipped = analyses_skipped_;
   for (const auto& [reason, n] : screened_.items()) sum.extra[std::string("screening_") + reason] = static_cast<double>(n);
   sum.fragment_fallbacks = fallbacks_;
+  const FragmentCounts& fc = fragment_counts_;
+  sum.extra["fragment_refinements"] = static_cast<double>(fc.refinements);
+  sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fc.absorbed);
+  sum.extra["fragment_grid_nodes_per_child"] =
+      fc.children > 0 ? static_cast<double>(fc.grid_nodes) / static_cast<double>(fc.children) : 0.0;
   long failed = 0;
   for (const auto& [word, count] : analysis_failures_) {
     sum.extra["analyses_failed_" + word] = static_cast<double>(count);
@@ -442,6 +473,9 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   sum.extra["analyses_failed"] = static_cast<double>(failed);
   sum.dt_reductions = dt_reductions_;
   finish_open_scene(sum);
+  // The part of all the solid that ever entered (initial grains and fed rocks) removed as fines.
+  const double entered = sum.mass_initial + mass_fed_;
+  sum.extra["fines_mass_fraction"] = entered > 0 ? removed_mass_ / entered : 0.0;
   sum.extra["guard_max_overlap_fraction"] = guard_max_.max_overlap_fraction;
   sum.extra["guard_max_energy_ratio"] = guard_max_.energy_ratio;
   sum.extra["guard_small_grain_overlaps"] = static_cast<double>(guard_max_.small_grain_overlaps);
@@ -491,6 +525,7 @@ void Simulation::check_breakage(const RunState& st) {
   run_analyses(b);
   build_fragments(b);
   const auto t0 = Clock::now();
+  const double observers0 = timings_.observers;
   std::vector<char> remove(grains_.size(), 0);
   std::vector<Grain> added;
   for (long k = 0; k < static_cast<long>(b.candidates.size()); ++k)
@@ -501,7 +536,8 @@ void Simulation::check_breakage(const RunState& st) {
     if (!remove[i]) kept.push_back(std::move(grains_[i]));
   for (auto& c : added) kept.push_back(std::move(c));
   grains_ = std::move(kept);
-  timings_.fragments += seconds_since(t0);
+  // The observers told of the outcomes count as output, not as fragment building.
+  timings_.fragments += std::max(0.0, seconds_since(t0) - (timings_.observers - observers0));
 }
 
 // The contacts, and the grains the screening selects with the loads their analyses get.
@@ -608,7 +644,7 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
     // as it was, before anything of it changed: the mass budget holds, and the run goes on.
     rec.analysis.broken = false;
     rec.analysis.outcome = "failed";
-    for (auto& o : observers_) o->on_analysis(*this, rec);
+    notify([&](Observer& o) { o.on_analysis(*this, rec); });
     note_analysis_failure(parent, b.errors[k]);
     return false;
   }
@@ -622,7 +658,7 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
   if (result.broken && crushed) rec.analysis.outcome = "crushed";
   else if (result.broken && pieces < 2) rec.analysis.outcome = "no_split";
   else if (result.broken && frag.children.size() == 1) rec.analysis.outcome = "chip";
-  for (auto& o : observers_) o->on_analysis(*this, rec);
+  notify([&](Observer& o) { o.on_analysis(*this, rec); });
   Grain& g = grains_[b.candidates[k]];
   if (!result.broken) {
     // Remembered for the skip rule (Screening.h) only when the rule is on, so that runs
@@ -656,6 +692,10 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   ev.fragment_method = frag.method;
   ev.analysis = rec.analysis;
   fallbacks_ += frag.fallbacks;
+  fragment_counts_.grid_nodes += frag.grid_nodes;
+  fragment_counts_.children += static_cast<long>(frag.children.size());
+  fragment_counts_.refinements += frag.refinements;
+  fragment_counts_.absorbed += frag.absorbed;
   // Mass budget: children + the builder's removed pieces = parent (FragmentBuilder.h).
   double vsum = frag.removed_volume;
   for (const auto& f : frag.children) vsum += f.shape->volume();
@@ -667,10 +707,15 @@ void Simulation::split_grain(const Grain& parent, const FragmentResult& frag, co
   std::vector<Grain> children = make_children(parent, frag, mat, ev);
   removed_volume_ += ev.removed_volume;
   removed_mass_ += ev.removed_volume * mat.density;
+  double& by_builder = frag.children.empty()       ? removed_by_path_.crushed
+                       : frag.children.size() == 1 ? removed_by_path_.chip
+                                                   : removed_by_path_.split_pieces;
+  by_builder += frag.removed_volume * mat.density;
+  removed_by_path_.fines_diameter += (ev.removed_volume - frag.removed_volume) * mat.density;
   engine_->replace_grain(parent.id, children);
   for (auto& c : children) added.push_back(std::move(c));
   ++events_;
-  for (auto& o : observers_) o->on_breakage(*this, ev);
+  notify([&](Observer& o) { o.on_breakage(*this, ev); });
 }
 
 // The children of `parent`: ids, lineage, pose in the world (v + ω × (c_child − c_parent)),

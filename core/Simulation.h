@@ -38,6 +38,25 @@ struct SimulationSettings {
   GuardSettings guards;               // physical invariants (core/Guards.h)
 };
 
+// Mass taken out of the engine as fines (kg), by the path that took it (summary.json
+// mass_removed_<path>_kg; the paths sum to mass_removed_kg).
+struct RemovedMassByPath {
+  double crushed = 0;         // grains the builder removed whole (outcome crushed)
+  double chip = 0;            // pieces the builder removed when it kept one child (outcome chip)
+  double split_pieces = 0;    // pieces the builder removed from a split into two children or more
+  double fines_diameter = 0;  // children finer than simulation.fines_diameter
+  double guard = 0;           // small grains that left the container (guards)
+};
+
+// What the fragment builders made so far (summary.json fragment_grid_nodes_per_child,
+// fragment_refinements, fragment_pieces_absorbed).
+struct FragmentCounts {
+  long grid_nodes = 0;   // nodes of the children's grids
+  long children = 0;     // children built
+  long refinements = 0;  // splits repeated on a finer grid
+  long absorbed = 0;     // unresolved pieces merged into a kept child
+};
+
 // Everything besides the grains that a run needs to continue from a checkpoint. The
 // engine is rebuilt from the grains: contact history and solver warm starts start afresh,
 // and the platen starts at rest where it was.
@@ -47,6 +66,8 @@ struct SimulationState {
   double initial_height = 0;
   double platen_position = 0;
   double removed_volume = 0, removed_mass = 0;
+  RemovedMassByPath removed_by_path;
+  FragmentCounts fragment_counts;
   long events = 0, analyses = 0, fallbacks = 0, dt_reductions = 0;
   long analyses_skipped = 0;  // screened in but skipped by the skip rule (Screening.h)
   ScreeningCounts screened;   // grain checks per screening outcome
@@ -149,6 +170,7 @@ class Simulation {
   double solid_volume() const;  // in the engine + removed fines
   double removed_volume() const { return removed_volume_; }
   double removed_mass() const { return removed_mass_; }  // kg, the fines taken out of the engine
+  const RemovedMassByPath& removed_by_path() const { return removed_by_path_; }
   RunState state() const;
   // Pull poses from the engine into grains() (observers that draw or measure call this).
   void sync_grains();
@@ -177,6 +199,11 @@ class Simulation {
     std::vector<FragmentResult> frags;
     std::vector<std::string> errors;  // non-empty: the analysis or the fragment build threw
   };
+  // Every observer called with `call(observer)`, each call's wall time added to
+  // timings_.observers and to that observer's own tally (Timings::output_by_writer).
+  template <class F>
+  void notify(F&& call);
+  void tally_output();  // timings_.output_by_writer from the per-observer seconds
   RunState start_run(RunSummary& sum);
   double next_time_step(const RunState& st);
   void step_once(double dt, RunState& st);
@@ -208,12 +235,16 @@ class Simulation {
   Container container_;
   std::vector<Grain> grains_;
   std::vector<std::shared_ptr<Observer>> observers_;
+  std::vector<double> observer_seconds_;  // s, per observer (the same order)
   GrainId next_id_ = 0;
   double time_ = 0;
   long step_ = 0;
   double dt_ = 0;
   double removed_volume_ = 0;
   double removed_mass_ = 0;
+  RemovedMassByPath removed_by_path_;
+  // The builders' cost figures (FragmentResult), counted per process like analysis failures.
+  FragmentCounts fragment_counts_;
   double initial_height_ = 0;
   long events_ = 0, analyses_ = 0, fallbacks_ = 0, dt_reductions_ = 0;
   long analyses_skipped_ = 0;

@@ -771,6 +771,29 @@ std::shared_ptr<const LevelSetGrid> LevelSetGrid::scaled(double f) const {
   return g;
 }
 
+std::shared_ptr<const LevelSetGrid> LevelSetGrid::resampled(double h, double node_spacing, int pad) const {
+  if (!(h > 0) || !std::isfinite(h) || pad < 2)
+    throw std::invalid_argument(name_ + ": resampling needs a finite spacing > 0 and a margin of >= 2 cells");
+  if (nodes_.empty()) throw std::invalid_argument(name_ + ": resampling needs the surface nodes");
+  Aabb box;
+  for (const auto& x : nodes_) box.extend(x);
+  const Vec3 origin = box.lo - Vec3{1, 1, dim_ == 3 ? 1.0 : 0.0} * (pad * h);
+  std::array<int, 3> n{1, 1, 1};
+  double total = 1;
+  for (int a = 0; a < dim_; ++a) {
+    n[a] = static_cast<int>(std::min(std::ceil(box.size()[a] / h - 1e-9), 1e9)) + 1 + 2 * pad;
+    total *= n[a];
+  }
+  if (total > 2e8) throw std::invalid_argument(name_ + ": resampled grid of " + num(total) + " nodes is too large");
+  std::vector<double> v(static_cast<std::size_t>(total));
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        v[i + static_cast<std::size_t>(n[0]) * (j + static_cast<std::size_t>(n[1]) * k)] =
+            value(origin + Vec3{i * h, j * h, dim_ == 3 ? k * h : 0.0});
+  return from_values(dim_, origin, h, n, std::move(v), node_spacing, true, name_);
+}
+
 std::shared_ptr<const LevelSetGrid> LevelSetGrid::reinitialised() const {
   auto g = LevelSetGridBuilder::make();
   *g = *this;

@@ -165,19 +165,18 @@ std::vector<double> child_values(const Lattice& L, const LevelSetGrid& W, const 
 }
 
 // The child grid: a signed distance again before use (Eq. 17's purpose: closest points,
-// no PDE); then kept as a child, or removed when thin, empty, below min_volume or without
-// a resolved zero level.
-void add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
-               SplitResult& out) {
+// no PDE); then kept as a child (true), or put in `removed` when thin, empty, below
+// min_volume or without a resolved zero level (false).
+bool add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
+               SplitResult& out, std::vector<SplitPiece>& removed) {
   const double h = g->spacing();
   g = g->reinitialised();
   const double vmin = *std::min_element(g->values().begin(), g->values().end());
   SplitPiece piece = measure(g);
   const bool thin = -vmin < 0.5 * o.min_thickness_cells * h;
   if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) {
-    out.removed_volume += std::max(0.0, piece.volume);
-    out.removed.push_back(std::move(piece));
-    return;
+    removed.push_back(std::move(piece));
+    return false;
   }
   try {
     std::vector<Vec3> nodes;
@@ -185,11 +184,63 @@ void add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOpt
     if (custom_nodes) (*custom_nodes)(region, *g, nodes, w);
     piece.grid = nodes.empty() ? g->with_values(g->values()) : g->with_nodes(std::move(nodes), std::move(w));
   } catch (const std::invalid_argument&) {  // no zero level resolved: too small to be a grain
-    out.removed_volume += piece.volume;
-    out.removed.push_back(std::move(piece));
-    return;
+    removed.push_back(std::move(piece));
+    return false;
   }
   out.children.push_back(std::move(piece));
+  return true;
+}
+
+// The kept component (any region) with an inside node within `cells` lattice cells (each
+// axis) of a node of component c, or -1.
+int kept_neighbour(const Lattice& L, const Component& c, const std::vector<RegionLabels>& stored,
+                   const std::vector<char>& kept, int cells) {
+  const int kz = L.dim == 3 ? cells : 0;
+  for (const std::size_t q : c.nodes) {
+    const int i = static_cast<int>(q % L.n[0]);
+    const int j = static_cast<int>((q / L.n[0]) % L.n[1]);
+    const int k = static_cast<int>(q / (static_cast<std::size_t>(L.n[0]) * L.n[1]));
+    for (int dk = -kz; dk <= kz; ++dk)
+      for (int dj = -cells; dj <= cells; ++dj)
+        for (int di = -cells; di <= cells; ++di) {
+          const int a = i + di, b = j + dj, e = k + dk;
+          if (a < 0 || b < 0 || e < 0 || a >= L.n[0] || b >= L.n[1] || e >= L.n[2]) continue;
+          const std::size_t t = L.id(a, b, e);
+          for (const auto& rl : stored)
+            if (rl.label[t] >= 0 && kept[static_cast<std::size_t>(rl.label[t])]) return rl.label[t];
+        }
+  }
+  return -1;
+}
+
+// The grid of the union of components `members` (the first one's region gives the surface
+// nodes): on the box of all of them padded by `pad` cells, the minimum of each member's
+// child values (eqs. 14–15 per member; across a cut plane the minimum is φ1 again).
+std::shared_ptr<const LevelSetGrid> union_grid(const Lattice& L, const LevelSetGrid& W, const RegionFn& beyond,
+                                               const std::vector<Component>& comps,
+                                               const std::vector<RegionLabels>& stored,
+                                               const std::vector<int>& members, int pad, double node_spacing) {
+  std::array<int, 3> lo{}, cnt{1, 1, 1};
+  for (int a = 0; a < L.dim; ++a) {
+    int l = comps[members[0]].lo[a], h = comps[members[0]].hi[a];
+    for (const int m : members) {
+      l = std::min(l, comps[m].lo[a]);
+      h = std::max(h, comps[m].hi[a]);
+    }
+    lo[a] = l - pad;
+    cnt[a] = h - l + 1 + 2 * pad;
+  }
+  std::vector<double> v;
+  for (const int m : members) {
+    std::size_t slot = 0;
+    while (stored[slot].region != comps[m].region) ++slot;
+    std::vector<double> w = child_values(L, W, beyond, comps[m], m, stored[slot], lo, cnt);
+    if (v.empty()) v = std::move(w);
+    else
+      for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::min(v[i], w[i]);
+  }
+  return LevelSetGrid::from_values(L.dim, L.point(lo[0], lo[1], lo[2]), L.h, cnt, std::move(v), node_spacing, false,
+                                   "level-set child");
 }
 
 SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int regions, const RegionFill& fill,
@@ -204,19 +255,41 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
     return out;
   }
   // Pass 2: one cropped, reinitialised grid per component.
+  std::vector<char> kept(comps.size(), 0);
+  std::vector<int> child_of(comps.size(), -1);
+  std::vector<std::vector<SplitPiece>> dropped(comps.size());
+  SplitResult first;
   for (std::size_t ci = 0; ci < comps.size(); ++ci) {
-    const Component& c = comps[ci];
-    std::size_t slot = 0;
-    while (stored[slot].region != c.region) ++slot;
-    std::array<int, 3> lo{}, cnt{1, 1, 1};
-    for (int a = 0; a < L.dim; ++a) {
-      lo[a] = c.lo[a] - o.pad;
-      cnt[a] = c.hi[a] - c.lo[a] + 1 + 2 * o.pad;
+    kept[ci] = add_child(union_grid(L, W, beyond, comps, stored, {static_cast<int>(ci)}, o.pad, node_spacing),
+                         comps[ci].region, o, custom_nodes, first, dropped[ci]);
+    if (kept[ci]) child_of[ci] = static_cast<int>(first.children.size()) - 1;
+  }
+  // Pass 3: a dropped piece next to a kept child is a lattice artefact of the cut: the child
+  // is rebuilt as the union of the two (absorbed); other dropped pieces are removed.
+  std::vector<std::vector<int>> members(comps.size());
+  for (std::size_t ci = 0; ci < comps.size(); ++ci) {
+    if (kept[ci]) members[ci].push_back(static_cast<int>(ci));
+    if (dropped[ci].empty()) continue;
+    const int to = o.absorb_cells > 0 ? kept_neighbour(L, comps[ci], stored, kept, o.absorb_cells) : -1;
+    if (to >= 0) {
+      members[static_cast<std::size_t>(to)].push_back(static_cast<int>(ci));
+      ++out.absorbed;
+      out.absorbed_volume += std::max(0.0, dropped[ci].front().volume);
+      continue;
     }
-    std::vector<double> v = child_values(L, W, beyond, c, static_cast<int>(ci), stored[slot], lo, cnt);
-    add_child(LevelSetGrid::from_values(L.dim, L.point(lo[0], lo[1], lo[2]), L.h, cnt, std::move(v), node_spacing,
-                                        false, "level-set child"),
-              c.region, o, custom_nodes, out);
+    out.removed_volume += std::max(0.0, dropped[ci].front().volume);
+    out.removed.push_back(std::move(dropped[ci].front()));
+  }
+  for (std::size_t ci = 0; ci < comps.size(); ++ci) {
+    if (!kept[ci]) continue;
+    if (members[ci].size() == 1) {
+      out.children.push_back(std::move(first.children[static_cast<std::size_t>(child_of[ci])]));
+      continue;
+    }
+    std::vector<SplitPiece> none;
+    if (!add_child(union_grid(L, W, beyond, comps, stored, members[ci], o.pad, node_spacing), comps[ci].region, o,
+                   custom_nodes, out, none))
+      out.children.push_back(std::move(first.children[static_cast<std::size_t>(child_of[ci])]));  // cannot happen
   }
   return out;
 }

@@ -20,7 +20,11 @@
 //   Other splits rebuild the nodes from the zero level at the parent's node spacing.
 // - A piece thinner than `min_thickness_cells` grid cells (its deepest point less than
 //   half that thickness inside) or smaller than `min_volume` is removed; its volume is
-//   reported, never dropped silently.
+//   reported, never dropped silently — unless it lies within `absorb_cells` lattice cells of
+//   a kept child: then it is an artefact of cutting a lattice (a row of nodes a plane cut off
+//   from its piece, a cap thinner than a cell; Harmon et al. 2020 take φ3 and φ4 whole, with
+//   no connectivity test, so such nodes stay part of a child) and that child is rebuilt as
+//   the union of the two (the minimum of their values: across a cut plane, φ1 again).
 #pragma once
 #include <functional>
 #include <memory>
@@ -47,6 +51,7 @@ struct SplitOptions {
   int pad = 3;
   double min_thickness_cells = 1.0;  // thinner pieces are removed
   double min_volume = 0;             // m³ (2D: m²); smaller pieces are removed
+  int absorb_cells = 0;              // a piece to remove this near a kept child is absorbed; 0 = off
 };
 
 struct SplitPiece {
@@ -59,6 +64,8 @@ struct SplitResult {
   std::vector<SplitPiece> children;
   std::vector<SplitPiece> removed;  // thin or small pieces (grid volume counted)
   double removed_volume = 0;        // Σ removed[i].volume
+  int absorbed = 0;                 // pieces to remove that a kept child took in
+  double absorbed_volume = 0;       // their own grid volume (now inside that child)
   // The surfaces missed the grain (a single piece): no split, `children` and `removed`
   // are empty. Not an error.
   bool missed = false;

@@ -132,6 +132,15 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"platen_position", st.platen_position},
                 {"removed_volume", st.removed_volume},
                 {"removed_mass", st.removed_mass},
+                {"removed_mass_crushed", st.removed_by_path.crushed},
+                {"removed_mass_chip", st.removed_by_path.chip},
+                {"removed_mass_split_pieces", st.removed_by_path.split_pieces},
+                {"removed_mass_fines_diameter", st.removed_by_path.fines_diameter},
+                {"removed_mass_guard", st.removed_by_path.guard},
+                {"fragment_grid_nodes", st.fragment_counts.grid_nodes},
+                {"fragment_children", st.fragment_counts.children},
+                {"fragment_refinements", st.fragment_counts.refinements},
+                {"fragment_absorbed", st.fragment_counts.absorbed},
                 {"events", st.events},
                 {"analyses", st.analyses},
                 {"analyses_skipped", st.analyses_skipped},
@@ -255,6 +264,15 @@ SimulationState read_state(const Config& s) {
   st.platen_position = s.positive("platen_position");
   st.removed_volume = s.number("removed_volume", 0, 0);
   st.removed_mass = s.number("removed_mass", 0, 0);
+  st.removed_by_path.crushed = s.number("removed_mass_crushed", 0, 0);
+  st.removed_by_path.chip = s.number("removed_mass_chip", 0, 0);
+  st.removed_by_path.split_pieces = s.number("removed_mass_split_pieces", 0, 0);
+  st.removed_by_path.fines_diameter = s.number("removed_mass_fines_diameter", 0, 0);
+  st.removed_by_path.guard = s.number("removed_mass_guard", 0, 0);
+  st.fragment_counts.grid_nodes = s.integer("fragment_grid_nodes", 0, 0);
+  st.fragment_counts.children = s.integer("fragment_children", 0, 0);
+  st.fragment_counts.refinements = s.integer("fragment_refinements", 0, 0);
+  st.fragment_counts.absorbed = s.integer("fragment_absorbed", 0, 0);
   st.events = s.integer("events", 0, 0);
   st.analyses = s.integer("analyses", 0, 0);
   st.analyses_skipped = s.integer("analyses_skipped", 0, 0);

@@ -57,6 +57,7 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario_
 // least) the checkpoint's step and a resume keeps exactly those.
 class CheckpointWriter : public Observer {
  public:
+  std::string name() const override { return "checkpoint"; }
   CheckpointWriter(std::string dir, std::string scenario, long every, double every_s = 0,
                    nlohmann::json run_info = nlohmann::json::object());
   void on_start(const Simulation& sim, const RunState& s) override;

@@ -19,6 +19,7 @@ LoadDisplacement write_load_displacement_csv(const std::string& dir);
 // max_platen_force_N. (Single-grain scenes write the same file from their own recorder.)
 class LoadDisplacementWriter : public Observer {
  public:
+  std::string name() const override { return "load_displacement"; }
   explicit LoadDisplacementWriter(std::string dir) : dir_(std::move(dir)) {}
   void on_finish(const Simulation&, const RunState& s, RunSummary& sum) override;
 
@@ -36,6 +37,7 @@ class LoadDisplacementWriter : public Observer {
 // and layer_K_largest_fragment_m.
 class LayerPsdWriter : public Observer {
  public:
+  std::string name() const override { return "psd_layers"; }
   LayerPsdWriter(std::string dir, int layers) : dir_(std::move(dir)), layers_(layers) {}
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary& sum) override;

@@ -22,6 +22,7 @@ namespace {
 // the characteristic strength F/d² and the fragments.
 class CrushingRecorder : public Observer {
  public:
+  std::string name() const override { return "crushing"; }
   explicit CrushingRecorder(std::string dir) : dir_(std::move(dir)) {}
   void on_start(const Simulation& sim, const RunState&) override {
     if (!sim.grains().empty()) d_ = sim.grains().front().shape->equivalent_diameter();
@@ -64,6 +65,7 @@ class CrushingRecorder : public Observer {
 // attached first), so a resumed run covers its whole history.
 class CompressionRecorder : public Observer {
  public:
+  std::string name() const override { return "compression"; }
   explicit CompressionRecorder(std::string dir) : dir_(std::move(dir)) {}
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {
     const auto rows = read_csv(dir_ + "/series.csv");
@@ -139,6 +141,7 @@ class CompressionRecorder : public Observer {
 // finished series.csv so a resumed run covers its whole history), and d50 and the fines fraction of the final size distribution by mass.
 class ReportRecorder : public Observer {
  public:
+  std::string name() const override { return "report"; }
   ReportRecorder(std::string dir, std::vector<double> stresses, std::vector<double> strains, double fines_size)
       : dir_(std::move(dir)), stresses_(std::move(stresses)), strains_(std::move(strains)), fines_size_(fines_size) {}
   void on_finish(const Simulation& sim, const RunState&, RunSummary& sum) override {

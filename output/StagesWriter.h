@@ -18,6 +18,7 @@ namespace crumble {
 
 class StagesWriter : public Observer {
  public:
+  std::string name() const override { return "stages"; }
   // What a stage is one unit of: MPa of vertical stress, or percent of axial strain.
   enum class Axis { Stress, Strain };
   // resume_step >= 0: continue the table of a run resumed at that step (the rows up to it

@@ -1,7 +1,9 @@
 #include "output/VtkWriter.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -40,62 +42,186 @@ VtpPiece::Field& VtpPiece::point_field(const std::string& name, int components, 
 
 namespace {
 
-void write_fields(std::ostream& os, const std::vector<VtpPiece::Field>& fields, std::size_t count, const char* where) {
+// Numbers as `std::ostream << std::setprecision(10) << v` prints them: std::to_chars in the
+// general format with a precision is printf's %.Ng, which the stream uses; without the
+// stream's cost (a snapshot of the Zhu & Zhao quick packing holds ~10⁵ numbers).
+void append_number(std::string& out, double v, int precision = 10) {
+  char buf[40];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, precision);
+  out.append(buf, r.ptr);
+}
+
+void append_integer(std::string& out, long long v) {
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+// The text of one value of field f; a cell field repeats a grain's value over all its cells,
+// so the text of the last value at each component is kept and reused while the value repeats.
+class FieldText {
+ public:
+  explicit FieldText(const VtpPiece::Field& f) : f_(f), last_(f.components) {}
+  void append(std::string& out, std::size_t i) {
+    const double v = f_.values[i];
+    Last& l = last_[i % f_.components];
+    if (!l.text.empty() && std::memcmp(&l.value, &v, sizeof v) == 0) {
+      out += l.text;
+      return;
+    }
+    l.value = v;
+    l.text.clear();
+    if (f_.integer) append_integer(l.text, static_cast<long long>(v));
+    else append_number(l.text, v, f_.exact ? 17 : 10);
+    out += l.text;
+  }
+
+ private:
+  struct Last {
+    double value = 0;
+    std::string text;
+  };
+  const VtpPiece::Field& f_;
+  std::vector<Last> last_;
+};
+
+// The values of field f, one entry (its components) a line.
+std::string values_text(const VtpPiece::Field& f, const char* where) {
+  std::string os;
+  FieldText text(f);
+  for (std::size_t i = 0; i < f.values.size(); ++i) {
+    if (!std::isfinite(f.values[i]))
+      throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
+                               f.name + "'");
+    text.append(os, i);
+    os += (i + 1) % f.components == 0 ? '\n' : ' ';
+  }
+  return os;
+}
+
+void write_fields(std::string& os, const std::vector<VtpPiece::Field>& fields, std::size_t count, const char* where,
+                  VtpTextCache* cache) {
   for (const auto& f : fields) {
     if (f.values.size() != count * static_cast<std::size_t>(f.components))
       throw std::logic_error(std::string("VTK ") + where + " field '" + f.name + "' has " +
                              std::to_string(f.values.size()) + " values for " + std::to_string(count) + " entries");
-    os << "<DataArray type=\"" << (f.integer ? "Int64" : "Float64") << "\" Name=\"" << f.name
-       << "\" NumberOfComponents=\"" << f.components << "\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < f.values.size(); ++i) {
-      const double v = f.values[i];
-      if (!std::isfinite(v))
-        throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
-                                 f.name + "'");
-      if (f.integer) os << static_cast<long long>(v);
-      else if (f.exact) os << std::setprecision(17) << v << std::setprecision(6);
-      else os << v;
-      os << ((i + 1) % f.components == 0 ? '\n' : ' ');
-    }
-    os << "</DataArray>\n";
+    const std::string head = std::string("<DataArray type=\"") + (f.integer ? "Int64" : "Float64") + "\" Name=\"" +
+                             f.name + "\" NumberOfComponents=\"" + std::to_string(f.components) +
+                             "\" format=\"ascii\">\n";
+    os += head;
+    const std::string key = where + head;
+    if (const std::string* t = cache ? cache->find(key, f.values) : nullptr) os += *t;
+    else if (cache) os += cache->store(key, f.values, values_text(f, where));
+    else os += values_text(f, where);
+    os += "</DataArray>\n";
   }
 }
 
-}  // namespace
-
-std::string vtp_text(const VtpPiece& p) {
-  std::ostringstream os;
-  os << std::setprecision(10);
-  const std::size_t nc = p.cells.size();
-  const auto count = [&](VtpPiece::Cells k) { return p.kind == k ? nc : 0; };
-  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-     << "<PolyData>\n<Piece NumberOfPoints=\"" << p.points.size() << "\" NumberOfVerts=\""
-     << count(VtpPiece::Cells::Verts) << "\" NumberOfLines=\"" << count(VtpPiece::Cells::Lines)
-     << "\" NumberOfStrips=\"0\" NumberOfPolys=\"" << count(VtpPiece::Cells::Polys) << "\">\n";
-  os << "<PointData>\n";
-  write_fields(os, p.point_fields, p.points.size(), "point");
-  os << "</PointData>\n<CellData>\n";
-  write_fields(os, p.cell_fields, nc, "cell");
-  os << "</CellData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const auto& x : p.points) {
-    if (!is_finite(x)) throw std::runtime_error("refusing to write a non-finite VTK point");
-    os << x.x << ' ' << x.y << ' ' << x.z << '\n';
-  }
-  os << "</DataArray>\n</Points>\n";
-  const char* tag = p.kind == VtpPiece::Cells::Verts ? "Verts" : p.kind == VtpPiece::Cells::Lines ? "Lines" : "Polys";
-  os << '<' << tag << ">\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+// The cells' connectivity (point indices, one cell a line), then their offsets.
+std::string cells_text(const VtpPiece& p) {
+  std::string os;
   for (const auto& c : p.cells) {
     for (std::size_t i = 0; i < c.size(); ++i) {
       if (c[i] < 0 || static_cast<std::size_t>(c[i]) >= p.points.size())
         throw std::logic_error("VTK cell names point " + std::to_string(c[i]) + " of " + std::to_string(p.points.size()));
-      os << c[i] << (i + 1 < c.size() ? ' ' : '\n');
+      append_integer(os, c[i]);
+      os += i + 1 < c.size() ? ' ' : '\n';
     }
   }
-  os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  os += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
   long off = 0;
-  for (const auto& c : p.cells) os << (off += static_cast<long>(c.size())) << '\n';
-  os << "</DataArray>\n</" << tag << ">\n</Piece>\n</PolyData>\n</VTKFile>\n";
-  return os.str();
+  for (const auto& c : p.cells) {
+    append_integer(os, off += static_cast<long>(c.size()));
+    os += '\n';
+  }
+  return os;
+}
+
+// The <Points> and the cells of a piece.
+void write_geometry(std::string& os, const VtpPiece& p, VtpTextCache* cache) {
+  os += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const auto& x : p.points) {
+    if (!is_finite(x)) throw std::runtime_error("refusing to write a non-finite VTK point");
+    append_number(os, x.x);
+    os += ' ';
+    append_number(os, x.y);
+    os += ' ';
+    append_number(os, x.z);
+    os += '\n';
+  }
+  os += "</DataArray>\n</Points>\n";
+  const std::string tag =
+      p.kind == VtpPiece::Cells::Verts ? "Verts" : p.kind == VtpPiece::Cells::Lines ? "Lines" : "Polys";
+  os += '<' + tag + ">\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  if (!cache) {
+    os += cells_text(p);
+  } else {
+    // The text depends on the cells and (through the index check) the number of points.
+    std::vector<double> key{static_cast<double>(p.points.size())};
+    for (const auto& c : p.cells) {
+      key.push_back(static_cast<double>(c.size()));
+      key.insert(key.end(), c.begin(), c.end());
+    }
+    const std::string* t = cache->find("cells", key);
+    os += t ? *t : cache->store("cells", std::move(key), cells_text(p));
+  }
+  os += "</DataArray>\n</" + tag + ">\n";
+}
+
+}  // namespace
+
+const std::string* VtpTextCache::find(const std::string& key, const std::vector<double>& values) const {
+  const auto it = entries_.find(key);
+  if (it == entries_.end() || it->second.values.size() != values.size()) return nullptr;
+  // Bitwise: -0 and 0 print differently.
+  if (!values.empty() && std::memcmp(it->second.values.data(), values.data(), values.size() * sizeof(double)) != 0)
+    return nullptr;
+  return &it->second.text;
+}
+
+const std::string& VtpTextCache::store(const std::string& key, std::vector<double> values, std::string text) {
+  Entry& e = entries_[key];
+  e.values = std::move(values);
+  e.text = std::move(text);
+  return e.text;
+}
+
+std::string vtp_text(const VtpPiece& p, VtpTextCache* cache) {
+  std::string os;
+  // About 12 characters a number: one reservation instead of the string's doublings.
+  std::size_t numbers = 4 * p.points.size() + 2 * p.cells.size();
+  for (const auto& f : p.point_fields) numbers += f.values.size();
+  for (const auto& f : p.cell_fields) numbers += f.values.size();
+  for (const auto& c : p.cells) numbers += c.size();
+  os.reserve(12 * numbers + 1024);
+  const std::size_t nc = p.cells.size();
+  const auto count = [&](VtpPiece::Cells k) { return std::to_string(p.kind == k ? nc : 0); };
+  os += "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
+  os += "<PolyData>\n<Piece NumberOfPoints=\"" + std::to_string(p.points.size()) + "\" NumberOfVerts=\"" +
+        count(VtpPiece::Cells::Verts) + "\" NumberOfLines=\"" + count(VtpPiece::Cells::Lines) +
+        "\" NumberOfStrips=\"0\" NumberOfPolys=\"" + count(VtpPiece::Cells::Polys) + "\">\n";
+  os += "<PointData>\n";
+  write_fields(os, p.point_fields, p.points.size(), "point", cache);
+  os += "</PointData>\n<CellData>\n";
+  write_fields(os, p.cell_fields, nc, "cell", cache);
+  os += "</CellData>\n";
+  write_geometry(os, p, cache);
+  os += "</Piece>\n</PolyData>\n</VTKFile>\n";
+  return os;
+}
+
+void PvdCollection::add(double time, const std::string& file) {
+  std::ostringstream os;
+  os << std::setprecision(12) << "  <DataSet timestep=\"" << time << '"';
+  // Several files at one time (analyses of one check): one part each, so ParaView shows them together.
+  if (parts_) os << " part=\"" << part_[time]++ << '"';
+  os << " file=\"vtk/" << file << "\"/>\n";
+  body_ += os.str();
+}
+
+std::string PvdCollection::text() const {
+  return "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n" + body_ +
+         "</Collection>\n</VTKFile>\n";
 }
 
 namespace {
@@ -104,20 +230,6 @@ std::string step_name(const char* prefix, long step, const char* ext) {
   char name[96];
   std::snprintf(name, sizeof name, "%s_%08ld.%s", prefix, step, ext);
   return name;
-}
-
-std::string pvd_text(const std::vector<std::pair<double, std::string>>& entries, bool parts) {
-  std::ostringstream os;
-  os << std::setprecision(12) << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-  // Several files at one time (analyses of one check): one part each, so ParaView shows them together.
-  std::map<double, int> part;
-  for (const auto& [t, f] : entries) {
-    os << "  <DataSet timestep=\"" << t << '"';
-    if (parts) os << " part=\"" << part[t]++ << '"';
-    os << " file=\"vtk/" << f << "\"/>\n";
-  }
-  os << "</Collection>\n</VTKFile>\n";
-  return os.str();
 }
 
 // (timestep, file) of every entry of a .pvd this family wrote.
@@ -161,19 +273,22 @@ VtkWriter::VtkWriter(const std::string& dir, Settings settings, long resume_step
   // Keep the earlier snapshots up to the resume step (file names carry the step).
   for (const auto& [t, f] : read_pvd(dir_ + "/grains.pvd")) {
     const long step = step_of(f);
-    if (step >= 0 && step <= resume_step) steps_.push_back({t, step});
+    if (step >= 0 && step <= resume_step) add_to_collections(t, step);
   }
   last_ = resume_step;
 }
 
-void VtkWriter::write_collections() const {
-  std::vector<std::pair<double, std::string>> grains, scene;
-  for (const auto& [t, step] : steps_) {
-    grains.push_back({t, step_name("grains", step, "vtp")});
-    scene.push_back({t, step_name("scene", step, "vtm")});
-  }
-  write_file_atomic(dir_ + "/grains.pvd", pvd_text(grains, false));
-  write_file_atomic(dir_ + "/scene.pvd", pvd_text(scene, false));
+void VtkWriter::add_to_collections(double time, long step) {
+  grains_pvd_.add(time, step_name("grains", step, "vtp"));
+  scene_pvd_.add(time, step_name("scene", step, "vtm"));
+  collections_written_ = false;
+}
+
+void VtkWriter::write_collections() {
+  if (collections_written_) return;  // the files on disk hold them already
+  write_file_atomic(dir_ + "/grains.pvd", grains_pvd_.text());
+  write_file_atomic(dir_ + "/scene.pvd", scene_pvd_.text());
+  collections_written_ = true;
 }
 
 void VtkWriter::on_start(const Simulation& sim, const RunState& s) {
@@ -191,70 +306,97 @@ void VtkWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&)
 
 namespace {
 
-// Pose, volume and mass of each grain, at full precision (crumble's Python reader sums the
-// masses to the summary's mass_final_kg): `position` (centroid, m), `orientation` (unit
-// quaternion body → world, w x y z), `volume` (m³; 2D: m² of the outline) and `mass` (kg;
-// 2D: per m of thickness).
-void declare_pose_fields(VtpPiece& p) {
-  p.cell_field("position", 3).exact = true;
-  p.cell_field("orientation", 4).exact = true;
-  p.cell_field("volume").exact = true;
-  p.cell_field("mass").exact = true;
-}
+// The per-cell fields of the grains piece, created in the order ParaView lists them (what a
+// user looks for first comes first), then filled grain by grain without a lookup by name.
+struct GrainCellFields {
+  std::vector<VtpPiece::Field*> ints, shape;  // grain, parent, origin, generation, crush_count
+  VtpPiece::Field *diameter, *velocity, *angular_velocity, *load = nullptr;
+  // Pose, volume and mass at full precision (crumble's Python reader sums the masses to the
+  // summary's mass_final_kg): position (centroid, m), orientation (unit quaternion body →
+  // world, w x y z), volume (m³; 2D: m² of the outline), mass (kg; 2D: per m of thickness).
+  VtpPiece::Field *position, *orientation, *volume, *mass;
+  std::vector<std::pair<std::string, VtpPiece::Field*>> strengths;
 
-void push_pose(VtpPiece& p, const Grain& g, double density) {
-  push3(p.cell_field("position", 3).values, g.position);
-  auto& q = p.cell_field("orientation", 4).values;
-  q.insert(q.end(), {g.orientation.w, g.orientation.x, g.orientation.y, g.orientation.z});
-  p.cell_field("volume").values.push_back(g.shape->volume());
-  p.cell_field("mass").values.push_back(g.mass(density));
-}
-
-// The grain's surface in world coordinates: 3D its mesh's triangles, 2D its outline as one
-// polygon. Returns the number of cells added.
-std::size_t add_grain_surface(VtpPiece& p, const Grain& g) {
-  if (g.shape->dimension() == 3) {
-    const TriMesh& m = g.shape->mesh();
-    const long base = static_cast<long>(p.points.size());
-    for (const auto& v : m.vertices) p.points.push_back(g.to_world(v));
-    for (const auto& t : m.triangles) p.cells.push_back({base + t[0], base + t[1], base + t[2]});
-    return m.triangles.size();
+  GrainCellFields(VtpPiece& p, const Simulation& sim, const std::string& measure) {
+    // Every strength value any grain carries (one model: the same names on every grain).
+    std::set<std::string> strength_names;
+    for (const auto& g : sim.grains())
+      for (const auto& [k, v] : g.strength.values) strength_names.insert(k);
+    const bool two_d = sim.context().dimension == 2;
+    const char* shape_names[3] = {two_d ? "circularity" : "sphericity", two_d ? "aspect_ratio" : "zingg_ei",
+                                  two_d ? "sieve_size" : "zingg_fi"};
+    // Every field first, then the pointers: the vector of fields no longer grows.
+    for (const char* n : {"grain", "parent", "origin", "generation", "crush_count"}) p.cell_field(n, 1, true);
+    p.cell_field("diameter");
+    p.cell_field("velocity", 3);
+    p.cell_field("angular_velocity", 3);
+    for (auto [n, c] : {std::pair{"position", 3}, {"orientation", 4}, {"volume", 1}, {"mass", 1}})
+      p.cell_field(n, c).exact = true;
+    if (!measure.empty()) p.cell_field(measure);
+    for (const auto& n : strength_names) p.cell_field(n);
+    for (const char* n : shape_names) p.cell_field(n);
+    for (const char* n : {"grain", "parent", "origin", "generation", "crush_count"}) ints.push_back(&p.cell_field(n, 1, true));
+    diameter = &p.cell_field("diameter");
+    velocity = &p.cell_field("velocity", 3);
+    angular_velocity = &p.cell_field("angular_velocity", 3);
+    position = &p.cell_field("position", 3);
+    orientation = &p.cell_field("orientation", 4);
+    volume = &p.cell_field("volume");
+    mass = &p.cell_field("mass");
+    if (!measure.empty()) load = &p.cell_field(measure);
+    for (const auto& n : strength_names) strengths.push_back({n, &p.cell_field(n)});
+    for (const char* n : shape_names) shape.push_back(&p.cell_field(n));
   }
-  std::vector<Vec3> poly;
-  for (const auto& v : g.shape->outline()) poly.push_back(g.to_world(v));
-  add_polygon_cell(p, poly);
-  return 1;
+
+  // Grain g's values on each of its n cells.
+  void add(const Grain& g, std::size_t n, double load_value, const double shp[3], double density) {
+    const double id[5] = {static_cast<double>(g.id), static_cast<double>(g.parent), static_cast<double>(g.origin),
+                          static_cast<double>(g.generation), static_cast<double>(g.crush_count)};
+    for (int k = 0; k < 5; ++k) ints[k]->values.insert(ints[k]->values.end(), n, id[k]);
+    diameter->values.insert(diameter->values.end(), n, g.shape->equivalent_diameter());
+    for (std::size_t c = 0; c < n; ++c) {
+      push3(velocity->values, g.velocity);
+      push3(angular_velocity->values, g.angular_velocity);
+      push3(position->values, g.position);
+      orientation->values.insert(orientation->values.end(),
+                                 {g.orientation.w, g.orientation.x, g.orientation.y, g.orientation.z});
+    }
+    volume->values.insert(volume->values.end(), n, g.shape->volume());
+    mass->values.insert(mass->values.end(), n, g.mass(density));
+    if (load) load->values.insert(load->values.end(), n, load_value);
+    // -1: the grain has no such value (cannot happen with one model; kept explicit).
+    for (auto& [name, f] : strengths) f->values.insert(f->values.end(), n, g.strength.get_or(name, -1.0));
+    for (int k = 0; k < 3; ++k) shape[k]->values.insert(shape[k]->values.end(), n, shp[k]);
+  }
+};
+
+// Grain g's surface (3D: its mesh's triangles; 2D: its outline as one polygon) in world
+// coordinates; the number of cells added.
+std::size_t add_grain_surface(VtpPiece& p, const Grain& g) {
+  if (g.shape->dimension() != 3) {
+    std::vector<Vec3> poly;
+    for (const auto& v : g.shape->outline()) poly.push_back(g.to_world(v));
+    add_polygon_cell(p, poly);
+    return 1;
+  }
+  const TriMesh& m = g.shape->mesh();
+  const long base = static_cast<long>(p.points.size());
+  for (const auto& v : m.vertices) p.points.push_back(g.to_world(v));
+  for (const auto& t : m.triangles) p.cells.push_back({base + t[0], base + t[1], base + t[2]});
+  return m.triangles.size();
 }
 
-VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Contact>>& on) {
+VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Contact>>& on, ShapeMetricsCache& metrics) {
   VtpPiece p;
   p.kind = VtpPiece::Cells::Polys;
   const BreakageModel& model = sim.model();
   const std::string measure = model.load_measure_name();
-  // Every strength value any grain carries (one model: the same names on every grain).
-  std::set<std::string> strength_names;
-  for (const auto& g : sim.grains())
-    for (const auto& [k, v] : g.strength.values) strength_names.insert(k);
+  GrainCellFields fields(p, sim, measure);
   const bool two_d = sim.context().dimension == 2;
-  const char* shape_names[3] = {two_d ? "circularity" : "sphericity", two_d ? "aspect_ratio" : "zingg_ei",
-                                two_d ? "sieve_size" : "zingg_fi"};
-  // Field order: what ParaView lists first is what a user looks for first.
-  for (const char* n : {"grain", "parent", "origin", "generation", "crush_count"}) p.cell_field(n, 1, true);
-  p.cell_field("diameter");
-  p.cell_field("velocity", 3);
-  p.cell_field("angular_velocity", 3);
-  declare_pose_fields(p);
-  if (!measure.empty()) p.cell_field(measure);
-  for (const auto& n : strength_names) p.cell_field(n);
-  for (const char* n : shape_names) p.cell_field(n);
-
-  std::map<const Shape*, GrainShapeMetrics> metrics;
   const auto& grains = sim.grains();
   for (std::size_t gi = 0; gi < grains.size(); ++gi) {
     const Grain& g = grains[gi];
-    auto mit = metrics.find(g.shape.get());
-    if (mit == metrics.end()) mit = metrics.emplace(g.shape.get(), grain_shape_metrics(*g.shape)).first;
-    const GrainShapeMetrics& gm = mit->second;
+    const GrainShapeMetrics& gm = metrics.get(g.shape);
     // -1 marks "no descriptor" (a degenerate sliver); no output of crumble holds NaN.
     auto val = [](double v) { return std::isfinite(v) ? v : -1.0; };
     const double shp[3] = {val(two_d ? gm.circularity : gm.sphericity), val(two_d ? gm.aspect_ratio : gm.elongation),
@@ -266,23 +408,9 @@ VtpPiece grains_piece(const Simulation& sim, const std::vector<std::vector<Conta
         throw std::runtime_error("breakage model '" + model.name() + "' gave a non-finite " + measure + " for grain " +
                                  std::to_string(g.id));
     }
-    const std::size_t ncells = add_grain_surface(p, g);
-    for (std::size_t c = 0; c < ncells; ++c) {
-      p.cell_field("grain", 1, true).values.push_back(static_cast<double>(g.id));
-      p.cell_field("parent", 1, true).values.push_back(static_cast<double>(g.parent));
-      p.cell_field("origin", 1, true).values.push_back(static_cast<double>(g.origin));
-      p.cell_field("generation", 1, true).values.push_back(g.generation);
-      p.cell_field("crush_count", 1, true).values.push_back(g.crush_count);
-      p.cell_field("diameter").values.push_back(g.shape->equivalent_diameter());
-      push3(p.cell_field("velocity", 3).values, g.velocity);
-      push3(p.cell_field("angular_velocity", 3).values, g.angular_velocity);
-      push_pose(p, g, sim.context().materials[g.material].density);
-      if (!measure.empty()) p.cell_field(measure).values.push_back(load);
-      // -1: the grain has no such value (cannot happen with one model; kept explicit).
-      for (const auto& n : strength_names) p.cell_field(n).values.push_back(g.strength.get_or(n, -1.0));
-      for (int k = 0; k < 3; ++k) p.cell_field(shape_names[k]).values.push_back(shp[k]);
-    }
+    fields.add(g, add_grain_surface(p, g), load, shp, sim.context().materials[g.material].density);
   }
+  metrics.sweep();
   return p;
 }
 
@@ -403,10 +531,10 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   std::vector<std::pair<std::string, std::string>> blocks;  // (block name, file)
   auto put = [&](const char* block, const VtpPiece& piece) {
     const std::string name = step_name(block, s.step, "vtp");
-    write_file_atomic(dir_ + "/vtk/" + name, vtp_text(piece));
+    write_file_atomic(dir_ + "/vtk/" + name, vtp_text(piece, &text_[block]));
     blocks.push_back({block, name});
   };
-  put("grains", grains_piece(sim, on));
+  put("grains", grains_piece(sim, on, metrics_));
   put("walls", walls_piece(sim, s.time, set_.wall_height));
   if (!sim.container().open) put("platen", platen_piece(sim, s));
   if (set_.contacts) put("contacts", contacts_piece(sim, contacts));
@@ -419,7 +547,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
         << "\"/>\n";
   vtm << "</vtkMultiBlockDataSet>\n</VTKFile>\n";
   write_file_atomic(dir_ + "/vtk/" + step_name("scene", s.step, "vtm"), vtm.str());
-  steps_.push_back({s.time, s.step});
+  add_to_collections(s.time, s.step);
   write_collections();
 }
 
@@ -428,14 +556,14 @@ AnalysisVtkWriter::AnalysisVtkWriter(const std::string& dir, long resume_step) :
   if (resume_step < 0) return;
   for (const auto& [t, f] : read_pvd(dir_ + "/analyses.pvd")) {
     const long step = step_of(f);
-    if (step >= 0 && step <= resume_step) files_.push_back({t, f});
+    if (step >= 0 && step <= resume_step) pvd_.add(t, f);
   }
 }
 
-void AnalysisVtkWriter::write_collection() const {
-  std::vector<std::pair<double, std::string>> e;
-  for (const auto& f : files_) e.push_back({f.time, f.file});
-  write_file_atomic(dir_ + "/analyses.pvd", pvd_text(e, true));
+void AnalysisVtkWriter::write_collection() {
+  if (collection_written_) return;  // the file on disk holds it already
+  write_file_atomic(dir_ + "/analyses.pvd", pvd_.text());
+  collection_written_ = true;
 }
 
 void AnalysisVtkWriter::on_breakage(const Simulation& sim, const BreakageEvent& e) {
@@ -462,7 +590,8 @@ void AnalysisVtkWriter::on_breakage(const Simulation& sim, const BreakageEvent& 
   char name[96];
   std::snprintf(name, sizeof name, "analysis_%08ld_g%lld.vtp", e.step, static_cast<long long>(e.parent));
   write_file_atomic(dir_ + "/vtk/" + name, vtp_text(p));
-  files_.push_back({e.time, name});
+  pvd_.add(e.time, name);
+  collection_written_ = false;
   write_collection();
 }
 

@@ -12,6 +12,7 @@
 //
 // No NaN or infinity is ever written: a non-finite value is an error naming the field.
 #pragma once
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "core/Observer.h"
 #include "core/Options.h"
 #include "core/Simulation.h"
+#include "output/Writers.h"
 
 namespace crumble {
 
@@ -65,12 +67,45 @@ struct VtpPiece {
   Field& cell_field(const std::string& name, int components = 1, bool integer = false);
   Field& point_field(const std::string& name, int components = 1, bool integer = false);
 };
+// The text of the arrays of one piece as the last snapshot wrote them (a grain keeps its id,
+// shape and surface cells between two breakages): an array whose values are bitwise those
+// of the last call is not formatted again.
+class VtpTextCache {
+ public:
+  // The text stored under key, when it was stored for exactly these values; else null.
+  const std::string* find(const std::string& key, const std::vector<double>& values) const;
+  const std::string& store(const std::string& key, std::vector<double> values, std::string text);
+
+ private:
+  struct Entry {
+    std::vector<double> values;
+    std::string text;
+  };
+  std::map<std::string, Entry> entries_;
+};
+
 // The .vtp text; throws std::runtime_error naming the field when a value is not finite or a
-// field has the wrong length.
-std::string vtp_text(const VtpPiece& piece);
+// field has the wrong length. With a cache: the text of unchanged arrays comes from it.
+std::string vtp_text(const VtpPiece& piece, VtpTextCache* cache = nullptr);
+
+// A ParaView collection (.pvd) kept as text, one line formatted per entry when it is added
+// (a run rewrites its collections after every snapshot). parts: several files at one time
+// get one part number each, so ParaView shows them together.
+class PvdCollection {
+ public:
+  explicit PvdCollection(bool parts = false) : parts_(parts) {}
+  void add(double time, const std::string& file);  // file: its name inside vtk/
+  std::string text() const;
+
+ private:
+  bool parts_;
+  std::string body_;
+  std::map<double, int> part_;
+};
 
 class VtkWriter : public Observer {
  public:
+  std::string name() const override { return "vtk"; }
   struct Settings {
     long every = 0;           // steps between snapshots (0 = none)
     bool final_state = true;  // a snapshot of the final state
@@ -86,28 +121,30 @@ class VtkWriter : public Observer {
 
  private:
   void snapshot(const Simulation& sim, const RunState& s);
-  void write_collections() const;
+  void add_to_collections(double time, long step);
+  void write_collections();
   std::string dir_;
   Settings set_;
   long last_ = -1;
-  std::vector<std::pair<double, long>> steps_;  // (time, step) of every snapshot
+  PvdCollection grains_pvd_, scene_pvd_;  // every snapshot
+  bool collections_written_ = false;      // the .pvd files hold every snapshot so far
+  std::map<std::string, VtpTextCache> text_;  // by block (grains, walls, ...)
+  ShapeMetricsCache metrics_;             // the grains' shape descriptors, once per shape
 };
 
 class AnalysisVtkWriter : public Observer {
  public:
+  std::string name() const override { return "vtk_analyses"; }
   // resume_step >= 0: keep the analyses of the earlier run up to that step.
   AnalysisVtkWriter(const std::string& dir, long resume_step = -1);
   void on_breakage(const Simulation& sim, const BreakageEvent& e) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
  private:
-  void write_collection() const;
+  void write_collection();
   std::string dir_;
-  struct Entry {
-    double time;
-    std::string file;
-  };
-  std::vector<Entry> files_;
+  PvdCollection pvd_{true};
+  bool collection_written_ = false;  // analyses.pvd holds every analysis so far
 };
 
 // Names a run writes into vtk/ (and their temporary names), for `--force` cleaning.

@@ -41,6 +41,7 @@ class CsvStream {
 // vertical stress yet, an open scene). summary.json: k0_final, the last defined value.
 class SeriesWriter : public Observer {
  public:
+  std::string name() const override { return "series"; }
   // resume_step >= 0: continue the series of a run resumed at that step.
   explicit SeriesWriter(const std::string& dir, long resume_step = -1);
   void on_sample(const Simulation&, const RunState& s) override;
@@ -62,6 +63,7 @@ double current_k0(const Simulation& sim, const RunState& s);
 // breakage_per_mpa.csv: crushing events per MPa of platen stress.
 class EventsWriter : public Observer {
  public:
+  std::string name() const override { return "events"; }
   // resume_step >= 0: continue the rows of a run resumed at that step. intact false: only the
   // analyses that broke their grain get a row (output.intact_analyses).
   EventsWriter(const std::string& dir, std::vector<std::string> figure_names, long resume_step = -1,
@@ -89,6 +91,7 @@ class EventsWriter : public Observer {
 // carries the step of the sample its table was taken at.
 class PsdWriter : public Observer {
  public:
+  std::string name() const override { return "psd"; }
   // A resumed run (resume_step >= 0) keeps the earlier run's tables taken at or before that
   // step; a psd.csv without a step column is kept up to resume_stress (and resume_strain).
   PsdWriter(const std::string& dir, std::vector<double> levels, double resume_stress = -1,
@@ -119,12 +122,28 @@ struct GrainShapeMetrics {
 };
 GrainShapeMetrics grain_shape_metrics(const Shape& shape);
 
+// grain_shape_metrics computed once per Shape (shared and immutable: a grain that breaks is
+// replaced by fragments with shapes of their own) and kept while a grain still uses it. A
+// sample looks up every grain's shape, then sweep() releases the shapes it did not look up:
+// each sample computes the descriptors of the new shapes only.
+class ShapeMetricsCache {
+ public:
+  const GrainShapeMetrics& get(const Shape::Ptr& shape);
+  void sweep();
+  std::size_t computed() const { return computed_; }  // descriptors computed so far
+
+ private:
+  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> cache_, now_;
+  std::size_t computed_ = 0;
+};
+
 // shape.csv: number means of the grains' shape descriptors against strain and stress, one row
 // per series sample (time_s, step, axial_strain, platen_stress_Pa, grains, then 2D
 // mean_circularity, mean_aspect_ratio, mean_sieve_size_m; 3D mean_sphericity, mean_EI,
-// mean_FI). Metrics are computed once per Shape (shared, immutable) and cached while in use.
+// mean_FI). Metrics are computed once per Shape (ShapeMetricsCache).
 class ShapeWriter : public Observer {
  public:
+  std::string name() const override { return "shape"; }
   // resume_step >= 0: continue the rows of a run resumed at that step.
   ShapeWriter(const std::string& dir, int dimension, long resume_step = -1);
   void on_start(const Simulation& sim, const RunState& s) override { on_sample(sim, s); }  // the strain-0 row
@@ -135,7 +154,7 @@ class ShapeWriter : public Observer {
   int dim_;
   CsvStream csv_;
   long last_step_ = -1;
-  std::map<const Shape*, std::pair<Shape::Ptr, GrainShapeMetrics>> cache_;
+  ShapeMetricsCache cache_;
   std::vector<double> last_means_;
 };
 
@@ -162,6 +181,7 @@ nlohmann::json summary_json(const RunSummary& s, const std::string& scenario, co
 // and the scene's own figures.
 class ProductWriter : public Observer {
  public:
+  std::string name() const override { return "product"; }
   ProductWriter(const std::string& dir, std::map<std::string, double> figures);
   void on_finish(const Simulation& sim, const RunState& s, RunSummary& sum) override;
 

@@ -273,6 +273,7 @@ EngineContext context_from(const Config& root, Json& doc, const BuildOptions& op
   ctx.materials = materials_from(root);
   ctx.threads = sc.threads;
   ctx.seed = sc.seed;
+  ctx.fines_diameter = read_options<SimulationSettings>(root.child("simulation"), simulation_options()).fines_diameter;
   return ctx;
 }
 

@@ -1,7 +1,6 @@
 #include "geometry/level_set/LevelSetBuilder.h"
 
 #include <algorithm>
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
@@ -16,24 +15,21 @@ LevelSetBuilder::LevelSetBuilder(LevelSetBuilderOptions opt) : opt_(opt) {
   check_options(level_set_options(), opt_, "LevelSetBuilder");
 }
 
-FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fracture) const {
-  const LevelSetGrid& phi1 = parent.level_set();
-  const double V = parent.volume();
-  SplitOptions so;
-  so.spacing = opt_.spacing;
-  so.min_thickness_cells = opt_.min_thickness_cells;
-  so.min_volume = opt_.min_piece_volume_fraction * V;
-  FragmentResult out;
-  const SplitResult first = std::visit(
+namespace {
+
+// The split the fracture asks for, on the parent's grid or at so.spacing; `method` names it.
+SplitResult split_once(const LevelSetGrid& phi1, const Fracture& fracture, const SplitOptions& so,
+                       std::string& method) {
+  return std::visit(
       [&](const auto& f) -> SplitResult {
         using T = std::decay_t<decltype(f)>;
         if constexpr (std::is_same_v<T, CuttingSurfaces>) {
-          out.method = "level_set_planes";
+          method = "level_set_planes";
           std::vector<SplitPlane> planes;
           for (const auto& p : f.planes) planes.push_back({p.normal, p.offset});
           return split_by_planes(phi1, planes, so);
         } else {
-          out.method = "level_set_clusters";
+          method = "level_set_clusters";
           const Quat& q = f.frame;
           const double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
           if (!std::isfinite(qn) || std::abs(qn - 1) > 1e-9)
@@ -44,51 +40,126 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
         }
       },
       fracture);
-  SplitResult sr = first;
+}
+
+// True when a cutting plane runs through the grain: parent surface nodes more than a quarter
+// cell on both sides of it.
+bool cut_through(const LevelSetGrid& phi1, const CuttingSurfaces* cs) {
+  if (!cs) return false;
+  const double h = phi1.spacing();
+  for (const auto& p : cs->planes) {
+    bool neg = false, pos = false;
+    for (const auto& x : phi1.nodes()) {
+      const double f = p.signed_distance(x);
+      neg = neg || f < -0.25 * h;
+      pos = pos || f > 0.25 * h;
+    }
+    if (neg && pos) return true;
+  }
+  return false;
+}
+
+// One plane through the grain that leaves no grid node on one side: moved along its normal
+// to leave at least one row of nodes on each side. Missed when the grain has a single row of
+// nodes along the normal.
+SplitResult moved_cut(const LevelSetGrid& phi1, const CutPlane& p, const SplitOptions& so) {
+  const double h = phi1.spacing();
+  const auto c = phi1.counts();
+  const auto& v = phi1.values();
+  double hmin = 1e300, hmax = -1e300;
+  for (int k = 0; k < c[2]; ++k)
+    for (int j = 0; j < c[1]; ++j)
+      for (int i = 0; i < c[0]; ++i) {
+        const std::size_t id = static_cast<std::size_t>(i) + static_cast<std::size_t>(c[0]) * (j + static_cast<std::size_t>(c[1]) * k);
+        if (!(v[id] < 0)) continue;
+        const double t = dot(p.normal, phi1.origin() + Vec3{i * h, j * h, phi1.dimension() == 3 ? k * h : 0.0});
+        hmin = std::min(hmin, t);
+        hmax = std::max(hmax, t);
+      }
+  SplitResult none;
+  none.missed = true;
+  if (hmax - hmin < 0.999 * h) return none;  // a single row of nodes: nothing to cut between
+  const double m = std::min(h, 0.5 * (hmax - hmin));  // a cell from the outer rows, or the middle
+  return split_by_planes(phi1, {{p.normal, std::clamp(p.offset, hmin + m, hmax - m)}}, so);
+}
+
+// The spacing that keeps a grid over `box` (plus 3 cells each side) at most `max_nodes` nodes.
+double capped_spacing(double h, const Aabb& box, int dim, long max_nodes) {
+  for (int it = 0; it < 60; ++it) {
+    double total = 1;
+    for (int a = 0; a < dim; ++a) total *= std::ceil(box.size()[a] / h) + 7;
+    if (total <= static_cast<double>(max_nodes)) return h;
+    h *= 1.1;
+  }
+  return h;
+}
+
+}  // namespace
+
+// The split on the parent's grid, repeated on grids refined by halves while it removes a piece
+// the grid cannot resolve or cannot resolve the cut at all (Harmon et al. 2020 §4.1, second
+// method), down to resolve_diameter / cells_across and the max_grid_nodes cap.
+SplitResult LevelSetBuilder::refined_split(const LevelSetGrid& phi1, const Fracture& fracture, SplitOptions& so,
+                                           bool through, FragmentResult& out) const {
+  so.spacing = opt_.spacing > 0 ? opt_.spacing : phi1.spacing();
+  SplitResult sr = split_once(phi1, fracture, so, out.method);
+  if (!(opt_.cells_across > 0) || !(opt_.resolve_diameter > 0)) return sr;
+  Aabb box;
+  for (const auto& x : phi1.nodes()) box.extend(x);
+  const double floor = capped_spacing(opt_.resolve_diameter / opt_.cells_across, box, phi1.dimension(),
+                                      opt_.max_grid_nodes);
+  while (((sr.missed && through) || !sr.removed.empty() || sr.absorbed > 0) && so.spacing > floor * (1 + 1e-9)) {
+    so.spacing = std::max(0.5 * so.spacing, floor);
+    sr = split_once(phi1, fracture, so, out.method);
+    ++out.refinements;
+  }
+  return sr;
+}
+
+// A child's grid at its own spacing: its thickness (twice its deepest inside distance) /
+// cells_across, never coarser than `coarsest`, within the max_grid_nodes cap; surface nodes
+// at `node_ratio` × the spacing.
+std::shared_ptr<const LevelSetGrid> LevelSetBuilder::own_resolution(const std::shared_ptr<const LevelSetGrid>& g,
+                                                                    double coarsest, double node_ratio) const {
+  if (!(opt_.cells_across > 0)) return g;
+  const double depth = -*std::min_element(g->values().begin(), g->values().end());
+  Aabb box;
+  for (const auto& x : g->nodes()) box.extend(x);
+  const double h = capped_spacing(std::min(coarsest, 2 * depth / opt_.cells_across), box, g->dimension(),
+                                  opt_.max_grid_nodes);
+  if (std::abs(h - g->spacing()) <= 1e-9 * h) return g;
+  try {
+    return g->resampled(h, node_ratio * h);
+  } catch (const std::invalid_argument&) {  // no zero level at the new spacing: keep the piece as cut
+    return g;
+  }
+}
+
+FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fracture) const {
+  const LevelSetGrid& phi1 = parent.level_set();
+  const double V = parent.volume();
+  SplitOptions so;
+  so.min_thickness_cells = opt_.min_thickness_cells;
+  so.min_volume = opt_.min_piece_volume_fraction * V;
+  so.absorb_cells = opt_.absorb_cells;
+  FragmentResult out;
+  const auto* cs = std::get_if<CuttingSurfaces>(&fracture);
+  const bool through = cut_through(phi1, cs);
+  SplitResult sr = refined_split(phi1, fracture, so, through, out);
   if (sr.missed) {
-    // The cut runs through the grain (parent surface nodes more than a quarter cell on both
-    // sides of a plane) but no grid node lies on one side of it: the grid cannot resolve
-    // the piece. One plane: it is moved along its normal to leave at least one row of grid
-    // nodes on each side (counted as a fallback). A grain with a single row of nodes along
+    // The cut runs through the grain but no grid node lies on one side of it, even on the
+    // finest grid allowed: one plane is moved along its normal to leave at least one row of
+    // grid nodes on each side (counted as a fallback). A grain with a single row of nodes along
     // the normal, or whose moved cut still fails, is of the size of its discretisation: Harmon et
     // al. 2020 §3.4 remove such grains, so it is crushed — all of it removed volume (no
     // child; events.csv outcome crushed). A cut that misses the grain stays a no_split.
-    const auto* cs = std::get_if<CuttingSurfaces>(&fracture);
-    const double h = phi1.spacing();
-    bool through = false;
-    if (cs)
-      for (const auto& p : cs->planes) {
-        bool neg = false, pos = false;
-        for (const auto& x : phi1.nodes()) {
-          const double f = p.signed_distance(x);
-          neg = neg || f < -0.25 * h;
-          pos = pos || f > 0.25 * h;
-        }
-        through = through || (neg && pos);
-      }
     if (!through) {
       out.method = "no_split";
       return out;
     }
     if (cs->planes.size() == 1) {
-      const CutPlane& p = cs->planes.front();
-      const auto c = phi1.counts();
-      const auto& v = phi1.values();
-      double hmin = 1e300, hmax = -1e300;
-      for (int k = 0; k < c[2]; ++k)
-        for (int j = 0; j < c[1]; ++j)
-          for (int i = 0; i < c[0]; ++i) {
-            const std::size_t id = static_cast<std::size_t>(i) + static_cast<std::size_t>(c[0]) * (j + static_cast<std::size_t>(c[1]) * k);
-            if (!(v[id] < 0)) continue;
-            const double t = dot(p.normal, phi1.origin() + Vec3{i * h, j * h, phi1.dimension() == 3 ? k * h : 0.0});
-            hmin = std::min(hmin, t);
-            hmax = std::max(hmax, t);
-          }
-      if (hmax - hmin >= 0.999 * h) {  // two rows of nodes or more: a cut between them
-        const double m = std::min(h, 0.5 * (hmax - hmin));  // a cell from the outer rows, or the middle
-        sr = split_by_planes(phi1, {{p.normal, std::clamp(p.offset, hmin + m, hmax - m)}}, so);
-        if (!sr.missed && !sr.children.empty()) out.method = "level_set_planes_moved";
-      }
+      sr = moved_cut(phi1, cs->planes.front(), so);
+      if (!sr.missed && !sr.children.empty()) out.method = "level_set_planes_moved";
     }
     if (sr.missed || sr.children.empty()) {
       out.method = "level_set_unresolved";
@@ -98,22 +169,42 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
     }
     ++out.fallbacks;
   }
+  finish_children(parent, sr, out);
+  return out;
+}
+
+// Each child at its own resolution, then the mass bookkeeping (see the header): grid volumes
+// × k with k = V_parent / Σ grid volumes, realised by scaling each child's grid about the
+// parent's centroid by k^(1/dim).
+void LevelSetBuilder::finish_children(const Shape& parent, SplitResult& sr, FragmentResult& out) const {
+  const LevelSetGrid& phi1 = parent.level_set();
+  const double coarsest = opt_.spacing > 0 ? opt_.spacing : phi1.spacing();
+  const double node_ratio = (phi1.node_spacing() > 0 ? phi1.node_spacing() : phi1.spacing()) / phi1.spacing();
+  const int dim = phi1.dimension();
   double sum = sr.removed_volume;
-  for (const auto& c : sr.children) sum += c.volume;
+  for (auto& c : sr.children) {
+    const double d = dim == 3 ? std::cbrt(6 * c.volume / kPi) : std::sqrt(4 * c.volume / kPi);
+    auto g = d < opt_.resolve_diameter ? c.grid : own_resolution(c.grid, coarsest, node_ratio);
+    if (g != c.grid) {
+      c.grid = std::move(g);
+      c.volume = c.grid->mass_properties().volume;
+    }
+    sum += c.volume;
+  }
   if (!(sum > 0)) throw std::runtime_error("fragment builder 'level_set': the pieces have no volume");
-  // Mass bookkeeping (see the header): grid volumes × k with k = V_parent / Σ grid volumes,
-  // realised by scaling each child's grid about the parent's centroid by k^(1/dim).
-  const double k = V / sum;
-  const double s = phi1.dimension() == 3 ? std::cbrt(k) : std::sqrt(k);
+  const double k = parent.volume() / sum;
+  const double s = dim == 3 ? std::cbrt(k) : std::sqrt(k);
   for (const auto& c : sr.children) {
     Fragment fr;
     fr.shape = Shape::from_level_set(c.grid->scaled(s));
     fr.offset = -fr.shape->recentring();  // the child's centroid in the parent frame
+    const auto n = c.grid->counts();
+    out.grid_nodes += static_cast<long>(n[0]) * n[1] * n[2];
     out.children.push_back(std::move(fr));
   }
   out.removed_volume = k * sr.removed_volume;
   out.fallbacks += static_cast<int>(sr.removed.size());  // pieces removed as fines
-  return out;
+  out.absorbed += sr.absorbed;
 }
 
 const OptionTable& level_set_options() {
@@ -127,15 +218,32 @@ const OptionTable& level_set_options() {
                     "fallback)"),
         opt::number("min_piece_volume_fraction", &S::min_piece_volume_fraction, 0, 0.49, "",
                     "a piece smaller than this × the parent's volume is removed (counted)"),
+        opt::number("cells_across", &S::cells_across, 0, 1000, "",
+                    "grid cells across a child's thickness (twice its deepest inside distance): each child is "
+                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §4.1, second "
+                    "method; the count is ours; measured in docs/validation.md); 0 = off: children keep the parent's "
+                    "lattice and no split is refined"),
+        opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",
+                    "a split that removes a piece its grid cannot resolve is repeated on grids of half the spacing, "
+                    "down to this / cells_across; 0 = simulation.fines_diameter (no refinement when that is 0 too)"),
+        opt::integer("absorb_cells", &S::absorb_cells, 0, 10,
+                     "a piece the grid cannot resolve (thinner than min_thickness_cells, no zero level) within this "
+                     "many grid cells of a kept child is a lattice artefact of the cut: the child is rebuilt as the "
+                     "union of the two instead of removing it as fines (Harmon et al. 2020 eqs. 14-15 keep such nodes in the child; "
+                     "ours); 0 = every such piece is removed"),
+        opt::integer("max_grid_nodes", &S::max_grid_nodes, 1000, 100000000,
+                     "nodes of one grid (a refined split's or a child's) at most: the spacing is raised to meet it "
+                     "(ours)"),
     };
   }();
   return t;
 }
 
-std::unique_ptr<FragmentBuilder> make_level_set_builder(const Config& cfg, const EngineContext&) {
+std::unique_ptr<FragmentBuilder> make_level_set_builder(const Config& cfg, const EngineContext& ctx) {
   cfg.string("type", "level_set");
   LevelSetBuilderOptions o;
   read_options(cfg, level_set_options(), o);
+  if (o.resolve_diameter == 0) o.resolve_diameter = ctx.fines_diameter;
   return std::make_unique<LevelSetBuilder>(o);
 }
 

@@ -130,6 +130,14 @@ TEST(Cli, RunWritesEveryOutput) {
                           "grains_initial", "grains_final", "breakage_events", "mass_initial_kg", "mass_final_kg",
                           "mass_removed_kg", "void_ratio_initial", "void_ratio_final", "max_platen_stress_Pa"})
     EXPECT_NE(s.find(std::string("\"") + key + "\""), std::string::npos) << key;
+  // time_breakdown_s.output by writer: every standard writer has its entry, and they sum to output.
+  const auto t = nlohmann::json::parse(s).at("time_breakdown_s");
+  ASSERT_TRUE(t.contains("output_by_writer")) << t.dump();
+  double sum = 0;
+  for (const auto& [name, seconds] : t.at("output_by_writer").items()) sum += seconds.get<double>();
+  for (const char* name : {"series", "events", "psd", "shape", "vtk", "stages", "compression", "report"})
+    EXPECT_TRUE(t.at("output_by_writer").contains(name)) << name << " in " << t.dump();
+  EXPECT_NEAR(sum, t.at("output").get<double>(), 1e-9 + 1e-9 * sum);
 }
 
 using crumble::testing_support::slurp;

@@ -100,6 +100,10 @@ TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
     EXPECT_EQ(eff["packing"]["type"], "file");
     // Fragment building has its own entry in where the time went.
     EXPECT_TRUE(s.at("time_breakdown_s").contains("fragments"));
+    // Per breakage event: a time, so with the times (not among the figures that must not
+    // depend on threads).
+    EXPECT_GE(s.at("time_breakdown_s").at("fragments_per_event").get<double>(), 0.0);
+    EXPECT_FALSE(s.contains("fragments_s_per_event"));
     EXPECT_TRUE(s.contains("psd_d50_final_m"));
     EXPECT_TRUE(s.contains("void_ratio_at_stress_1e+06_Pa"));
     // No breakage with breakage.type none; the mass budget holds either way.

@@ -140,6 +140,19 @@ std::string without_columns(const std::string& csv, const std::set<std::string>&
   return out;
 }
 
+// The resumed run's folder holds the same files as the uninterrupted one, each byte for byte
+// but summary.json, stages.csv and events.csv's wall_ms column (wall times of the process).
+void expect_same_files_but_wall_times(const fs::path& whole, const fs::path& killed, long kill_step) {
+  ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;  // no .part left
+  for (const auto& f : files_under(whole)) {
+    if (f == "summary.json" || f == "events.csv" || f == "stages.csv") continue;
+    EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (kill step " << kill_step << ")";
+  }
+  EXPECT_EQ(without_columns(slurp(whole / "events.csv"), {"wall_ms"}),
+            without_columns(slurp(killed / "events.csv"), {"wall_ms"}))
+      << "kill step " << kill_step;
+}
+
 }  // namespace
 
 // lsdem saves its contact history, half-step velocities and platen motion in the checkpoint
@@ -192,14 +205,7 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
                         "screening_unbalanced_force", "screening_unbalanced_moment", "screening_selected"})
     EXPECT_EQ(sa[k], sb[k]) << k;
 
-  ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;  // no .part left
-  for (const auto& f : files_under(whole)) {
-    if (f == "summary.json" || f == "events.csv" || f == "stages.csv") continue;
-    EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (kill step " << kill_step << ")";
-  }
-  EXPECT_EQ(without_columns(slurp(whole / "events.csv"), {"wall_ms"}),
-            without_columns(slurp(killed / "events.csv"), {"wall_ms"}))
-      << "kill step " << kill_step;
+  expect_same_files_but_wall_times(whole, killed, kill_step);
   // stages.csv: the same stages, steps, grains and analysis counts; wall times are the process's.
   const std::set<std::string> wall_columns{"resumed", "wall_s", "wall_total_s", "engine_s", "engine_ms_per_step",
                                            "analysis_s", "mean_analysis_ms", "breaking_share_of_analysis_time",
@@ -528,14 +534,7 @@ TEST(Resume, JawCrusherResumedAfterSigkillGivesTheSameProduct) {
   EXPECT_GE(sb["resumed_from_step"].get<long>(), 460000);
   EXPECT_TRUE(slurp(whole / "product_psd.csv") == slurp(killed / "product_psd.csv")) << "kill step " << kill_step;
   EXPECT_TRUE(slurp(whole / "product.csv") == slurp(killed / "product.csv")) << "kill step " << kill_step;
-  ASSERT_EQ(files_under(whole), files_under(killed)) << "kill step " << kill_step;
-  for (const auto& f : files_under(whole)) {
-    if (f == "summary.json" || f == "events.csv" || f == "stages.csv") continue;
-    EXPECT_TRUE(slurp(whole / f) == slurp(killed / f)) << f << " differs (kill step " << kill_step << ")";
-  }
-  EXPECT_EQ(without_columns(slurp(whole / "events.csv"), {"wall_ms"}),
-            without_columns(slurp(killed / "events.csv"), {"wall_ms"}))
-      << "kill step " << kill_step;
+  expect_same_files_but_wall_times(whole, killed, kill_step);
   EXPECT_EQ(summary_but_process(whole / "summary.json"), summary_but_process(killed / "summary.json"));
 }
 

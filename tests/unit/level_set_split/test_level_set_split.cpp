@@ -3,6 +3,7 @@
 // persistence of level-set grains, and an end-to-end run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -211,13 +212,126 @@ TEST(LevelSetSplit, ChildThinnerThanACellIsRemovedVolume) {
       }
   }
   ASSERT_GT(xn, 0.5 * kR);
-  LevelSetBuilder b;
+  const CuttingSurfaces cut{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}};
+  LevelSetBuilderOptions o;  // the default: every unresolved piece removed
   FragmentResult fr;
-  ASSERT_NO_THROW(fr = b.build(*parent, CuttingSurfaces{{{{1, 0, 0}, xn - 0.2 * g.spacing()}}}));
+  ASSERT_NO_THROW(fr = LevelSetBuilder(o).build(*parent, cut));
   EXPECT_EQ(fr.children.size(), 1u);
   EXPECT_GT(fr.removed_volume, 0.0);
   EXPECT_TRUE(std::isfinite(fr.removed_volume));
+  EXPECT_EQ(fr.absorbed, 0);
   EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  // absorb_cells 2 absorbs the cap (a node next to the kept child): nothing is removed, one
+  // child with the parent's whole volume, which the simulation records as no_split.
+  o.absorb_cells = 2;
+  const FragmentResult kept = LevelSetBuilder(o).build(*parent, cut);
+  EXPECT_EQ(kept.children.size(), 1u);
+  EXPECT_EQ(kept.removed_volume, 0.0);
+  EXPECT_EQ(kept.absorbed, 1);
+  EXPECT_EQ(kept.fallbacks, 0);
+  EXPECT_LT(budget_error(kept, parent->volume()), 1e-9);
+}
+
+// Pieces thinner than a cell that a cut leaves next to a kept child are lattice artefacts:
+// split_by_planes reports them absorbed, not removed, when absorb_cells > 0 (Harmon et al.
+// 2020 eqs. 14–15 take φ3 and φ4 whole, with no connectivity test).
+TEST(LevelSetSplit, PiecesThinnerThanACellNextToAKeptChildAreAbsorbed) {
+  // A square 2 mm wide on a 0.1 mm lattice: its outermost inside nodes lie at ±0.9 mm. Two
+  // planes 0.3 cells inside them (x = 0.87 mm, y = 0.87 mm) leave a one-node corner and two
+  // one-node-wide strips beyond them, all thinner than a cell, beside the big piece.
+  const double h = 0.1e-3;
+  const auto g = LevelSetGrid::sample(2, {{-1e-3, -1e-3, 0}, {1e-3, 1e-3, 0}}, h, [](const Vec3& p) {
+    return std::max(std::abs(p.x), std::abs(p.y)) - 1e-3;
+  });
+  const std::vector<SplitPlane> planes{{{1, 0, 0}, 0.87e-3}, {{0, 1, 0}, 0.87e-3}};
+  SplitOptions so;
+  so.absorb_cells = 0;
+  const SplitResult off = split_by_planes(*g, planes, so);
+  so.absorb_cells = 2;
+  const SplitResult on = split_by_planes(*g, planes, so);
+  ASSERT_EQ(off.children.size(), 1u);
+  ASSERT_EQ(off.removed.size(), 3u);
+  EXPECT_EQ(on.children.size(), 1u);
+  EXPECT_TRUE(on.removed.empty());
+  EXPECT_EQ(on.removed_volume, 0.0);
+  EXPECT_EQ(on.absorbed, 3);
+  EXPECT_NEAR(on.absorbed_volume, off.removed_volume, 1e-12 * off.removed_volume);
+  // The child took the strips in: it holds the square's whole grid volume (to the grid's own
+  // error), not the cut piece's plus a rescaling.
+  const double whole = g->mass_properties().volume;
+  EXPECT_LT(off.children[0].volume, 0.9 * whole);
+  EXPECT_NEAR(on.children[0].volume / whole, 1.0, 0.01);
+}
+
+// Harmon et al. 2020 §4.1, second method: the same sub-cell cap is kept when the split may be
+// refined (resolve_diameter): the split is repeated on finer grids until the cap is resolved,
+// and it becomes a child with the circular segment's area; nothing is removed.
+TEST(LevelSetSplit, ThinCapIsKeptWhenTheSplitIsRefined) {
+  const auto parent = Shape::disk(kR, {1, kH, 0});
+  // A cap 1.2 cells thick whose only grid nodes (x = 0.9 R) lie 0.2 cells inside it: on the
+  // parent's grid it is thinner than a cell (ChildThinnerThanACellIsRemovedVolume).
+  const double c = kR - 1.2 * kH;
+  LevelSetBuilderOptions o;
+  o.cells_across = 20;
+  o.resolve_diameter = 0.1e-3;
+  const FragmentResult fr = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{1, 0, 0}, c}}});
+  ASSERT_EQ(fr.children.size(), 2u) << fr.method;
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  EXPECT_GE(fr.refinements, 1);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  const double segment = kR * kR * std::acos(c / kR) - c * std::sqrt(kR * kR - c * c);
+  const double cap = std::min(fr.children[0].shape->volume(), fr.children[1].shape->volume());
+  EXPECT_NEAR(cap / segment, 1.0, 0.1);
+  // Each child's grid follows its own thickness: ≈ 20 cells across twice its deepest inside
+  // distance (the cap's spacing ≈ 1.2 h / 20, far finer than the parent's).
+  for (const auto& ch : fr.children) {
+    const LevelSetGrid& g = ch.shape->level_set();
+    const double depth = -*std::min_element(g.values().begin(), g.values().end());
+    EXPECT_NEAR(2 * depth / g.spacing(), 20.0, 2.0);
+    if (ch.shape->volume() == cap) {
+      EXPECT_LT(g.spacing(), 0.1 * kH);
+    }
+  }
+  // Off (cells_across 0): the parent's lattice, the cap removed.
+  o.cells_across = 0;
+  const FragmentResult off = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{1, 0, 0}, c}}});
+  EXPECT_EQ(off.children.size(), 1u);
+  EXPECT_GT(off.removed_volume, 0.0);
+  EXPECT_EQ(off.refinements, 0);
+}
+
+// Each child is resampled at its own size: the halves of a disk 20 cells across have
+// 2·(inscribed radius)/h ≈ 20 cells across their thickness again; max_grid_nodes caps it.
+TEST(LevelSetSplit, ChildrenAreResampledAtTheirOwnSizeWithinTheNodeCap) {
+  const auto parent = Shape::disk(kR, {1, kH, 0});
+  LevelSetBuilderOptions o;
+  o.cells_across = 20;
+  const FragmentResult fr = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{0, 1, 0}, 0.0}}});
+  ASSERT_EQ(fr.children.size(), 2u);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  for (const auto& ch : fr.children) {
+    const LevelSetGrid& g = ch.shape->level_set();
+    const double depth = -*std::min_element(g.values().begin(), g.values().end());
+    EXPECT_NEAR(2 * depth / g.spacing(), 20.0, 1.5);  // a half disk's inscribed diameter is R
+    EXPECT_NEAR(ch.shape->volume() / (0.5 * kPi * kR * kR), 1.0, 0.01);
+  }
+  EXPECT_GT(fr.grid_nodes, 0);
+  o.max_grid_nodes = 1000;
+  const FragmentResult capped = LevelSetBuilder(o).build(*parent, CuttingSurfaces{{{{0, 1, 0}, 0.0}}});
+  ASSERT_EQ(capped.children.size(), 2u);
+  for (const auto& ch : capped.children) {
+    const auto n = ch.shape->level_set().counts();
+    EXPECT_LE(n[0] * n[1], 1000);
+  }
+}
+
+TEST(LevelSetSplit, ResampledGridKeepsTheZeroLevel) {
+  const auto g = disk_grid();
+  const auto fine = g->resampled(0.5 * kH, 0);
+  EXPECT_NEAR(fine->spacing(), 0.5 * kH, 1e-15);
+  EXPECT_NEAR(fine->mass_properties().volume / (kPi * kR * kR), 1.0, 2 * own_error(*g, kPi * kR * kR) + 1e-3);
+  for (const auto& x : fine->nodes()) EXPECT_NEAR(std::hypot(x.x, x.y), kR, 0.05 * kH);
+  EXPECT_THROW(g->resampled(0.0, 0), std::invalid_argument);
 }
 
 // Harmon et al. 2020 §3.4: a grain of the size of its discretisation is removed. A slab

@@ -4,17 +4,21 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <filesystem>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <map>
 #include <stdexcept>
 #include <thread>
 
 #include "core/Simulation.h"
 #include "output/Checkpoint.h"
+#include "output/VtkWriter.h"
 #include "output/Writers.h"
 
 using namespace crumble;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -202,6 +206,10 @@ TEST(SimulationLoop, FinesLeaveTheEngineButStayInTheBudget) {
   EXPECT_GT(r.sum.mass_removed, 0);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
   for (const auto& g : r.grains) EXPECT_GE(g.shape->equivalent_diameter(), 1.05e-3);
+  // All of it went through simulation.fines_diameter (summary.json mass_removed_<path>_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_fines_diameter_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_chip_kg"), 0);
+  EXPECT_NEAR(r.sum.extra.at("fines_mass_fraction"), r.sum.mass_removed / r.sum.mass_initial, 1e-12);
 }
 
 // A builder's removed pieces (one child + removed volume, e.g. a level-set sliver thinner
@@ -213,6 +221,10 @@ TEST(SimulationLoop, BuilderRemovedVolumeCountsAsRemovedMass) {
   const double rho = Material{}.density, V = 4.0 / 3 * kPi * 1e-9;
   EXPECT_NEAR(r.sum.mass_removed, 8 * 0.125 * V * rho, 1e-9 * r.sum.mass_initial);
   EXPECT_NEAR(r.sum.mass_final + r.sum.mass_removed, r.sum.mass_initial, 1e-9 * r.sum.mass_initial);
+  // One child and removed pieces: the chip path (summary.json mass_removed_chip_kg).
+  EXPECT_NEAR(r.sum.extra.at("mass_removed_chip_kg"), r.sum.mass_removed, 1e-12 * r.sum.mass_initial);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_split_pieces_kg"), 0);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_fines_diameter_kg"), 0);
 }
 
 TEST(SimulationLoop, ResultsDoNotDependOnThreads) {
@@ -238,6 +250,106 @@ TEST(SimulationLoop, FragmentBuildingIsTimedApartFromAnalyses) {
   ASSERT_EQ(slow_model.sum.breakage_events, 8);
   EXPECT_GE(slow_model.sum.timings.analyses, 8 * 0.03);
   EXPECT_LT(slow_model.sum.timings.fragments, 0.3 * slow_model.sum.timings.analyses);
+}
+
+namespace {
+// Observers of known names and costs, for the per-writer timing.
+struct NamedObserver : Observer {
+  std::string label;
+  double sample_s = 0;  // s slept per sample
+  explicit NamedObserver(std::string l, double s = 0) : label(std::move(l)), sample_s(s) {}
+  std::string name() const override { return label; }
+  void on_sample(const Simulation&, const RunState&) override {
+    if (sample_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(sample_s));
+  }
+};
+struct Unnamed : Observer {};
+
+// The squeeze loop on one sphere of 1 mm radius, broken by `builder`.
+std::unique_ptr<Simulation> one_grain_squeeze(std::unique_ptr<FragmentBuilder> builder, long max_steps = 0) {
+  SqueezeSetup u = squeeze_setup();
+  u.ss.max_steps = max_steps;
+  auto sim = std::make_unique<Simulation>(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
+                                          std::move(builder), EngineContext{}, u.ss, u.ls, u.sch, u.scr, 123);
+  sim->set_container({0.01, 0.01, 0.01, 0});
+  Grain g;
+  g.shape = Shape::sphere(1e-3);
+  sim->add_grain(g);
+  return sim;
+}
+}  // namespace
+
+// summary.json time_breakdown_s.output_by_writer: each observer's seconds under its name,
+// observers of one name summed, and the parts summing to output.
+TEST(SimulationLoop, OutputIsTimedPerWriterAndSumsToOutput) {
+  const auto sim = one_grain_squeeze(std::make_unique<EighthBuilder>(), 20);
+  sim->add_observer(std::make_shared<NamedObserver>("slow", 2e-3));
+  sim->add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
+  sim->add_observer(std::make_shared<NamedObserver>("twice", 1e-3));
+  sim->add_observer(std::make_shared<Unnamed>());
+  const RunSummary sum = sim->run();
+  const auto& by = sum.timings.output_by_writer;
+  ASSERT_EQ(by.size(), 3u);  // slow, twice, other
+  // 20 samples in the loop and one at the end.
+  EXPECT_GE(by.at("slow"), 21 * 2e-3);
+  EXPECT_GE(by.at("twice"), 2 * 21 * 1e-3);
+  EXPECT_LT(by.at("other"), by.at("twice"));
+  const auto j = summary_json(sum, "s", "squeeze", "threshold", "eighth", 1, 1);
+  const auto& t = j.at("time_breakdown_s");
+  double parts = 0;
+  for (const auto& [name, seconds] : t.at("output_by_writer").items()) parts += seconds.get<double>();
+  EXPECT_NEAR(parts, t.at("output").get<double>(), 1e-12);
+  EXPECT_NEAR(t.at("output").get<double>(), sum.timings.observers, 1e-12);
+}
+
+namespace {
+// A sphere → two boxes of half its volume each (2:1:1, at ±x): fragments whose shape
+// descriptors differ from their parent's.
+class BoxesBuilder : public FragmentBuilder {
+ public:
+  std::string name() const override { return "boxes"; }
+  FragmentResult build(const Shape& parent, const Fracture&) const override {
+    const double c = std::cbrt(parent.volume() / 32);  // 8 · 2c · c · c = V / 2
+    return {{{Shape::box({2 * c, c, c}), {2 * c, 0, 0}}, {Shape::box({2 * c, c, c}), {-2 * c, 0, 0}}}, "boxes", 0};
+  }
+};
+
+// The values of DataArray `name` of a .vtp text, one per entry (first component).
+std::vector<double> vtp_array(const std::string& text, const std::string& name) {
+  std::vector<double> v;
+  const auto at = text.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return v;
+  std::istringstream in(text.substr(text.find('\n', at) + 1, text.find("</DataArray>", at) - text.find('\n', at) - 1));
+  for (double x; in >> x;) v.push_back(x);
+  return v;
+}
+}  // namespace
+
+// The shape descriptors are computed once per shape and kept between samples: after a
+// breakage, shape.csv and the VTK snapshot report the fragments' descriptors, not the parent's.
+TEST(SimulationLoop, CachedShapeDescriptorsFollowTheFragments) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_simulation_loop" / "shape_cache";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto sim = one_grain_squeeze(std::make_unique<BoxesBuilder>());
+  sim->add_observer(std::make_shared<ShapeWriter>(dir.string(), 3));
+  sim->add_observer(std::make_shared<VtkWriter>(dir.string(), VtkWriter::Settings{1, true, false, 0}));
+  const RunSummary sum = sim->run();
+  ASSERT_EQ(sum.breakage_events, 1);
+  const double sphere = grain_shape_metrics(*Shape::sphere(1e-3)).sphericity;
+  const double box = grain_shape_metrics(*sim->grains().front().shape).sphericity;
+  ASSERT_GT(std::abs(sphere - box), 0.1);
+  const auto rows = read_csv((dir / "shape.csv").string());
+  ASSERT_GT(rows.size(), 3u);
+  EXPECT_NEAR(std::stod(rows[1][5]), sphere, 1e-9);       // before the breakage
+  EXPECT_NEAR(std::stod(rows.back()[5]), box, 1e-9);      // after it: the fragments
+  EXPECT_EQ(rows.back()[4], "2");
+  std::ifstream in(dir / "vtk" / ("grains_" + std::string(8 - std::to_string(sum.steps).size(), '0') +
+                                  std::to_string(sum.steps) + ".vtp"));
+  const std::string last((std::istreambuf_iterator<char>(in)), {});
+  const auto values = vtp_array(last, "sphericity");
+  ASSERT_FALSE(values.empty());
+  for (double v : values) EXPECT_NEAR(v, box, 1e-9);
 }
 
 namespace {
