@@ -164,30 +164,25 @@ std::vector<double> child_values(const Lattice& L, const LevelSetGrid& W, const 
   return v;
 }
 
-// The child grid: a signed distance again before use (Eq. 17's purpose: closest points,
-// no PDE); then kept as a child (true), or put in `removed` when thin, empty, below
-// min_volume or without a resolved zero level (false).
-bool add_child(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
-               SplitResult& out, std::vector<SplitPiece>& removed) {
+// The piece of grid g: a signed distance again before use (Eq. 17's purpose: closest points,
+// no PDE). True when it is a child; false when it is to be removed: thin, empty, below
+// min_volume or without a resolved zero level.
+bool make_piece(std::shared_ptr<const LevelSetGrid> g, int region, const SplitOptions& o, const NodeFn* custom_nodes,
+                SplitPiece& piece) {
   const double h = g->spacing();
   g = g->reinitialised();
   const double vmin = *std::min_element(g->values().begin(), g->values().end());
-  SplitPiece piece = measure(g);
+  piece = measure(g);
   const bool thin = -vmin < 0.5 * o.min_thickness_cells * h;
-  if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) {
-    removed.push_back(std::move(piece));
-    return false;
-  }
+  if (thin || !(piece.volume > 0) || piece.volume < o.min_volume) return false;
   try {
     std::vector<Vec3> nodes;
     std::vector<double> w;
     if (custom_nodes) (*custom_nodes)(region, *g, nodes, w);
     piece.grid = nodes.empty() ? g->with_values(g->values()) : g->with_nodes(std::move(nodes), std::move(w));
   } catch (const std::invalid_argument&) {  // no zero level resolved: too small to be a grain
-    removed.push_back(std::move(piece));
     return false;
   }
-  out.children.push_back(std::move(piece));
   return true;
 }
 
@@ -255,41 +250,38 @@ SplitResult split_regions(const LevelSetGrid& W, double node_spacing, int region
     return out;
   }
   // Pass 2: one cropped, reinitialised grid per component.
+  std::vector<SplitPiece> pieces(comps.size());
   std::vector<char> kept(comps.size(), 0);
-  std::vector<int> child_of(comps.size(), -1);
-  std::vector<std::vector<SplitPiece>> dropped(comps.size());
-  SplitResult first;
-  for (std::size_t ci = 0; ci < comps.size(); ++ci) {
-    kept[ci] = add_child(union_grid(L, W, beyond, comps, stored, {static_cast<int>(ci)}, o.pad, node_spacing),
-                         comps[ci].region, o, custom_nodes, first, dropped[ci]);
-    if (kept[ci]) child_of[ci] = static_cast<int>(first.children.size()) - 1;
-  }
+  for (std::size_t ci = 0; ci < comps.size(); ++ci)
+    kept[ci] = make_piece(union_grid(L, W, beyond, comps, stored, {static_cast<int>(ci)}, o.pad, node_spacing),
+                          comps[ci].region, o, custom_nodes, pieces[ci]);
   // Pass 3: a dropped piece next to a kept child is a lattice artefact of the cut: the child
   // is rebuilt as the union of the two (absorbed); other dropped pieces are removed.
   std::vector<std::vector<int>> members(comps.size());
   for (std::size_t ci = 0; ci < comps.size(); ++ci) {
-    if (kept[ci]) members[ci].push_back(static_cast<int>(ci));
-    if (dropped[ci].empty()) continue;
+    if (kept[ci]) {
+      members[ci].push_back(static_cast<int>(ci));
+      continue;
+    }
+    const double v = std::max(0.0, pieces[ci].volume);
     const int to = o.absorb_cells > 0 ? kept_neighbour(L, comps[ci], stored, kept, o.absorb_cells) : -1;
     if (to >= 0) {
       members[static_cast<std::size_t>(to)].push_back(static_cast<int>(ci));
       ++out.absorbed;
-      out.absorbed_volume += std::max(0.0, dropped[ci].front().volume);
-      continue;
+      out.absorbed_volume += v;
+    } else {
+      out.removed_volume += v;
+      out.removed.push_back(std::move(pieces[ci]));
     }
-    out.removed_volume += std::max(0.0, dropped[ci].front().volume);
-    out.removed.push_back(std::move(dropped[ci].front()));
   }
   for (std::size_t ci = 0; ci < comps.size(); ++ci) {
     if (!kept[ci]) continue;
-    if (members[ci].size() == 1) {
-      out.children.push_back(std::move(first.children[static_cast<std::size_t>(child_of[ci])]));
-      continue;
-    }
-    std::vector<SplitPiece> none;
-    if (!add_child(union_grid(L, W, beyond, comps, stored, members[ci], o.pad, node_spacing), comps[ci].region, o,
-                   custom_nodes, out, none))
-      out.children.push_back(std::move(first.children[static_cast<std::size_t>(child_of[ci])]));  // cannot happen
+    SplitPiece merged;
+    if (members[ci].size() > 1 &&
+        make_piece(union_grid(L, W, beyond, comps, stored, members[ci], o.pad, node_spacing), comps[ci].region, o,
+                   custom_nodes, merged))
+      pieces[ci] = std::move(merged);  // (a union with a kept child is always kept)
+    out.children.push_back(std::move(pieces[ci]));
   }
   return out;
 }
