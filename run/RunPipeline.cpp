@@ -273,19 +273,11 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// summary.json `representations_built`: what this run built, by kind (base/BuildCounters.h),
-// and the same as one line for the end of the run.
+// summary.json `representations_built`: what this run built, by kind (base/BuildCounters.h).
 Json representations_json(const RepresentationCounts& built) {
   Json j = Json::object();
   for (std::size_t i = 0; i < kRepresentationKinds; ++i) j[to_string(static_cast<Representation>(i))] = built.n[i];
   return j;
-}
-std::string representations_line(const RepresentationCounts& built) {
-  std::string s;
-  for (std::size_t i = 0; i < kRepresentationKinds; ++i)
-    if (built.n[i] != 0)
-      s += (s.empty() ? "" : ", ") + std::to_string(built.n[i]) + " " + to_string(static_cast<Representation>(i));
-  return s.empty() ? "none" : s;
 }
 
 // Where the run starts: the settling of its packing (this run's, or on --resume the run it
@@ -503,12 +495,22 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
   return sum;
 }
 
-// summary.json of a run: the summary's figures, the packing's hash, the changes on
-// --resume, the analyses per MPI rank and the representations built.
+// summary.json's notes: the scenario's (printed, or declared deliberate) and the run's.
+Json notes_of(const Scenario& sc) {
+  std::vector<Note> all;
+  for (const auto& text : sc.notes) all.push_back({"", text, ""});
+  all.insert(all.end(), sc.deliberate_notes.begin(), sc.deliberate_notes.end());
+  all.insert(all.end(), sc.sim->notes().begin(), sc.sim->notes().end());
+  return notes_json(all);
+}
+
+// summary.json of a run: the summary's figures, the packing's hash, the notes, the changes
+// on --resume, the analyses per MPI rank and the representations built.
 Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, const std::string& packing_hash,
                  const RepresentationCounts& built) {
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
+  j["notes"] = notes_of(sc);
   if (!st.changed_on_resume.empty()) j["resume_changes"] = st.changed_on_resume;
   if (const AnalysisExecutor* ex = sc.sim->analysis_executor()) {
     j["analysis_ranks"] = ex->ranks();
@@ -524,14 +526,14 @@ Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, 
   return j;
 }
 
-void report_done(const RunRequest& req, const Scenario& sc, const RunSummary& sum, const RepresentationCounts& built) {
+void report_done(const RunRequest& req, const Scenario& sc, const RunSummary& sum) {
   if (sum.interrupted)
     std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
               << (sc.output.checkpoint_every > 0 || sc.output.checkpoint_every_s > 0 ? ", resume with --resume\n" : "\n");
+  // The representations built are in summary.json (representations_built), not on stderr.
   if (!req.quiet)
-    std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
-              << " grains, " << sum.breakage_events << " breakage events; results in " << req.out << "\n"
-              << "crumble: representations built: " << representations_line(built) << "\n";
+    std::cerr << "crumble: " << format_done(sum.wall_seconds, sum.steps, sum.grains_final, sum.breakage_events, req.out)
+              << "\n";
 }
 
 RunResult execute(const RunRequest& req) {
@@ -570,9 +572,11 @@ RunResult execute(const RunRequest& req) {
   const Json j = run_summary(sum, sc, st, packing_hash, built);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
   res.summary = j;
-  report_done(req, sc, sum, built);
+  report_done(req, sc, sum);
   // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
   if (req.plots && sc.output.plots) plots_after(out, req.quiet);
+  if (!req.quiet && !sum.interrupted)
+    if (const std::string open = what_to_open(out); !open.empty()) std::cerr << "crumble: " << open << "\n";
   if (sum.interrupted) {
     res.status = interrupted_status();
     res.reason = "interrupted at step " + std::to_string(sum.steps);
@@ -584,7 +588,7 @@ RunResult execute(const RunRequest& req) {
 
 Json request_document(const RunRequest& req) {
   Json doc = req.scenario;
-  for (const auto& o : req.sets) apply_override(doc, o);
+  for (const auto& o : req.sets) apply_override_lapsing(doc, o);
   if (req.packing_file && doc.is_object() && !doc.contains("scene"))
     doc["packing"] = Json{{"type", "file"}, {"path", *req.packing_file}};
   return doc;

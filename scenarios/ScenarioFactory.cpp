@@ -83,7 +83,7 @@ std::vector<TimeStepRule> time_steps_from(const Config& root) {
 // lsdem scenario builds no Bullet world).
 template <class T>
 void accept_sibling_options(const Config& section, const T& table, const std::string& active,
-                            std::vector<std::string>& notes) {
+                            std::vector<Note>& notes) {
   const std::set<std::string> used = section.read_keys();
   for (auto it = section.doc().begin(); it != section.doc().end(); ++it) {
     if (used.count(it.key())) continue;
@@ -110,7 +110,8 @@ void accept_sibling_options(const Config& section, const T& table, const std::st
       continue;  // declared by no implementation: check_unknown() reports it
     }
     section.accept(it.key());
-    notes.push_back(section.path() + "/" + it.key() + " is an option of " + owners + "', ignored by '" + active + "'");
+    const std::string path = section.path() + "/" + it.key();
+    notes.push_back({path, path + " is an option of " + owners + "', ignored by '" + active + "'", ""});
   }
 }
 
@@ -164,6 +165,7 @@ struct Implementations {
   std::unique_ptr<BreakageModel> model;
   std::unique_ptr<FragmentBuilder> builder;
   const RegistryEntry<EngineFactory>* engine_entry = nullptr;
+  std::vector<Note> notes;  // options of other implementations, accepted but not used
 };
 
 // An engine that cannot do what the packing asks (frictionless settling, moving walls) refuses
@@ -211,9 +213,9 @@ Implementations make_implementations(const Config& root, int dim, Scenario& sc, 
   im.engine = im.engine_entry->make(ec, ctx);
   check_engine_can(*im.engine, *im.engine_entry, root, ec, ctx, sc.packing);
   im.model = bentry.make(bc, ctx);
-  accept_sibling_options(ec, engines(), sc.engine_name, sc.notes);
-  accept_sibling_options(bc, breakage_models(), sc.breakage_name, sc.notes);
-  if (im.builder) accept_sibling_options(root.child("fragments"), fragment_builders(), sc.fragments_name, sc.notes);
+  accept_sibling_options(ec, engines(), sc.engine_name, im.notes);
+  accept_sibling_options(bc, breakage_models(), sc.breakage_name, im.notes);
+  if (im.builder) accept_sibling_options(root.child("fragments"), fragment_builders(), sc.fragments_name, im.notes);
   return im;
 }
 
@@ -280,7 +282,7 @@ EngineContext context_from(const Config& root, Json& doc, const BuildOptions& op
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
-  for (const auto& o : opt.overrides) apply_override(doc, o);
+  for (const auto& o : opt.overrides) apply_override_lapsing(doc, o);
   if (!doc.is_object()) throw ConfigError(opt.source_name, "a scenario must be a JSON object");
   Scenario sc;
   // The preset fills in knobs before anything reads the document, so the file's own values and
@@ -305,9 +307,18 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   sc.output = output_from(root);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
 
+  // A note about a setting the file declares deliberate goes to summary.json only (core/Notes.h).
+  const DeliberateSettings deliberate = read_deliberate(doc);
+  if (root.has("deliberate")) (void)root.raw("deliberate");  // read whole: its keys are JSON paths
+  for (const Note& n : im.notes) {
+    Note kept = make_note(deliberate, n.setting, n.text);
+    if (kept.deliberate.empty()) sc.notes.push_back(kept.text);
+    else sc.deliberate_notes.push_back(std::move(kept));
+  }
   root.check_unknown();
   sc.sim = std::make_unique<Simulation>(std::move(im.engine), std::move(im.model), std::move(im.builder), ctx, ss, ls,
                                         sch, scr, sc.seed);
+  sc.sim->set_deliberate(deliberate);
   sc.effective = doc;
   return sc;
 }

@@ -21,7 +21,8 @@ struct Scenario {
   std::uint64_t seed = 1;
   int threads = 1;
   std::string engine_name, breakage_name, fragments_name;
-  std::vector<std::string> notes;  // options accepted but not used (see build_scenario)
+  std::vector<std::string> notes;  // printed: options accepted but not used (see build_scenario)
+  std::vector<Note> deliberate_notes;  // not printed: about settings the file declares deliberate
 };
 
 struct BuildOptions {
