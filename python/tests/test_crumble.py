@@ -21,6 +21,17 @@ def cli(*args):
     return subprocess.run([crumble.binary(), *args], check=True, capture_output=True, text=True).stdout
 
 
+# ---- version
+
+
+def test_version_is_the_cmake_project_version():
+    project = re.search(r"project\(crumble VERSION ([0-9.]+)", (ROOT / "CMakeLists.txt").read_text()).group(1)
+    assert crumble.__version__ == project
+    assert subprocess.run([crumble.binary(), "--version"], capture_output=True, text=True).stdout.split()[1] == project
+    if crumble.version is not None:  # the compiled module's CRUMBLE_VERSION
+        assert crumble.version == project
+
+
 # ---- registry
 
 
