@@ -497,9 +497,9 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
 
 // summary.json's notes: the scenario's (printed, or declared deliberate) and the run's.
 Json notes_of(const Scenario& sc) {
-  std::vector<Note> all;
-  for (const auto& text : sc.notes) all.push_back({"", text, ""});
-  all.insert(all.end(), sc.deliberate_notes.begin(), sc.deliberate_notes.end());
+  std::vector<Note> all = sc.setting_notes;
+  for (const auto& text : sc.notes)  // the others (a fidelity preset's values)
+    if (std::none_of(all.begin(), all.end(), [&](const Note& n) { return n.text == text; })) all.push_back({"", text, ""});
   all.insert(all.end(), sc.sim->notes().begin(), sc.sim->notes().end());
   return notes_json(all);
 }

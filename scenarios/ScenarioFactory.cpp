@@ -311,9 +311,8 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   const DeliberateSettings deliberate = read_deliberate(doc);
   if (root.has("deliberate")) (void)root.raw("deliberate");  // read whole: its keys are JSON paths
   for (const Note& n : im.notes) {
-    Note kept = make_note(deliberate, n.setting, n.text);
-    if (kept.deliberate.empty()) sc.notes.push_back(kept.text);
-    else sc.deliberate_notes.push_back(std::move(kept));
+    sc.setting_notes.push_back(make_note(deliberate, n.setting, n.text));
+    if (sc.setting_notes.back().deliberate.empty()) sc.notes.push_back(n.text);
   }
   root.check_unknown();
   sc.sim = std::make_unique<Simulation>(std::move(im.engine), std::move(im.model), std::move(im.builder), ctx, ss, ls,

@@ -22,7 +22,8 @@ struct Scenario {
   int threads = 1;
   std::string engine_name, breakage_name, fragments_name;
   std::vector<std::string> notes;  // printed: options accepted but not used (see build_scenario)
-  std::vector<Note> deliberate_notes;  // not printed: about settings the file declares deliberate
+  // The notes about one setting, printed or not (declared deliberate: core/Notes.h), for summary.json.
+  std::vector<Note> setting_notes;
 };
 
 struct BuildOptions {
