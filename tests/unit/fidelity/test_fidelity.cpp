@@ -67,11 +67,17 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   // leaves them.
   EXPECT_EQ(sc.effective["engine"]["solver_iterations"].get<int>(), 1000);
   EXPECT_EQ(sc.effective["schedule"]["every_stress"].get<double>(), 0.1e6);
-  // What the preset did is said: a note per value it wrote, none for the ones it left.
+  // What the preset did is said: a note per value it wrote, none here (every knob was given),
+  // and one note naming the knobs it left and why.
+  std::string leaves;
   for (const auto& n : sc.notes) {
-    EXPECT_EQ(n.find("spacing_fraction"), std::string::npos) << n;
-    EXPECT_EQ(n.find("density_scale"), std::string::npos) << n;
+    EXPECT_EQ(n.rfind("fidelity 'fast' sets ", 0), std::string::npos) << n;
+    if (n.rfind("fidelity 'fast' changes nothing: ", 0) == 0) leaves = n;
   }
+  for (const char* k : {"breakage.spacing_fraction", "breakage.density_scale", "engine.solver_iterations",
+                        "schedule.every_stress", "given by the scenario or --set"})
+    EXPECT_NE(leaves.find(k), std::string::npos) << k << " not in '" << leaves << "'";
+  EXPECT_EQ(sc.presets.at("fidelity").at("changes_nothing"), true);
   // --set fidelity=... chooses the preset too; the preset fills what nothing else gives.
   Json plain = single_grain();
   plain["engine"].erase("solver_iterations");
