@@ -102,8 +102,8 @@ std::vector<std::string> apply_fidelity(Json& doc) { return apply_fidelity_repor
 
 std::string fidelity_text() {
   std::ostringstream o;
-  o << "fidelity presets (scenario key \"fidelity\": fast | balanced | accurate; a value the scenario or --set gives "
-       "wins; docs/speed-accuracy.md):\n";
+  o << "fidelity presets (scenario key \"fidelity\": fast | balanced | accurate; a value the scenario, --set or "
+       "the method gives wins; docs/speed-accuracy.md):\n";
   std::string last;
   for (const auto& k : fidelity_knobs()) {
     if (k.implementation != last) o << "  " << k.seam << " " << k.implementation << ":\n";

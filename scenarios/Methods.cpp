@@ -28,12 +28,11 @@ Method zhu_zhao_2019() {
           {{"engine.type", "bullet", "Zhu & Zhao 2019 §2.2"},
            {"engine.mass_scale", 70, "Zhu & Zhao 2019 §5"},
            {"engine.solver_iterations", 2000, "Zhu & Zhao 2019 §2.2"},
-           {"engine.solver_tolerance", 0, "Zhu & Zhao 2019 §2.2: every sweep, no early exit"},
+           {"engine.solver_tolerance", 0.0, "Zhu & Zhao 2019 §2.2: every sweep, no early exit"},
            {"breakage.type", "peridynamics", "Zhu & Zhao 2019 §2.1"},
            {"fragments.type", "alpha_shape", "Zhu & Zhao 2019 §3.2"},
            {"time_step", steps, "Zhu & Zhao 2019 §5: 8e-5 / 6e-5 / 5e-5 s below 10 / 24 MPa / above"},
            {"schedule.every_stress", 0.08e6, "Zhu & Zhao 2019 §5"},
-           {"schedule.every_steps", 0, "Zhu & Zhao 2019 §5: by stress only"},
            {"screening.min_diameter", 0.3e-3, "Zhu & Zhao 2019 §5: crushing limit"},
            {"screening.force_threshold", true, "Zhu & Zhao 2019 §5, eqs. 12/14"},
            {"screening.max_unbalanced_force_ratio", 0.02, "Zhu & Zhao 2019 §5"},
@@ -49,14 +48,13 @@ Method harmon_2020() {
           {{"engine.type", "lsdem", "Harmon et al. 2020 §2"},
            {"breakage.type", "stress", "Harmon et al. 2020 §3.1, eqs. 5–13"},
            {"fragments.type", "level_set", "Harmon et al. 2020 §3.2, eqs. 14–17"},
-           {"schedule.every_stress", 0, "Harmon et al. 2020 §3: by steps, not by stress"},
            {"schedule.every_steps", 100,
             "crumble's: the paper checks every step; every 100 steps is the stress model's own schedule"},
-           {"screening.min_diameter", 0, "Harmon et al. 2020 §3: no crushing limit (fines leave by "
+           {"screening.min_diameter", 0.0, "Harmon et al. 2020 §3: no crushing limit (fines leave by "
                                          "simulation.fines_diameter)"},
            {"screening.force_threshold", false, "Harmon et al. 2020 §3.1: the criterion alone decides"},
-           {"screening.max_unbalanced_force_ratio", 0, "Harmon et al. 2020 §3.1: no balance filter"},
-           {"screening.max_unbalanced_moment_ratio", 0, "Harmon et al. 2020 §3.1: no balance filter"}}};
+           {"screening.max_unbalanced_force_ratio", 0.0, "Harmon et al. 2020 §3.1: no balance filter"},
+           {"screening.max_unbalanced_moment_ratio", 0.0, "Harmon et al. 2020 §3.1: no balance filter"}}};
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "core/Config.h"
 #include "crumble_config.h"
 #include "output/Writers.h"
+#include "run/RunPipeline.h"
 #include "scenarios/Methods.h"
 #include "scenarios/ScenarioFactory.h"
 #include "tests/support/CliRunner.h"
