@@ -42,12 +42,11 @@ bool has_note(const Scenario& sc, const std::string& text) {
   return false;
 }
 
-fs::path test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path d = fs::temp_directory_path() / "crumble_methods_test" / info->name();
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+// A fresh folder for the current test (under $TMPDIR, one per test: ctest runs them in parallel).
+fs::path test_dir(const Json& scenario, const std::string& name) {
+  const fs::path f = testing_support::scenario_file("crumble_methods_test", name, scenario.dump(2));
+  fs::remove_all(f.parent_path() / "out");
+  return f.parent_path();
 }
 
 }  // namespace
@@ -187,7 +186,6 @@ TEST(Methods, CompareVaryMethodRunsBothFromOnePacking) {
 #if !CRUMBLE_WITH_BULLET || !CRUMBLE_WITH_CGAL
   GTEST_SKIP() << "needs Bullet and CGAL";
 #endif
-  const fs::path dir = test_dir();
   Json doc = load_scenario_file(kSource + "/scenarios/oedometer_zhu_zhao_quick.json");
   doc["container"] = {{"lx", 0.004}, {"ly", 0.004}};
   doc["packing"]["count"] = 8;
@@ -196,8 +194,8 @@ TEST(Methods, CompareVaryMethodRunsBothFromOnePacking) {
   doc["loading"] = {{"mode", "stress_ramp"}, {"max_stress", 1e6}, {"ramp_time", 0.005}};
   doc["output"] = {{"psd_at_stress", {1e6}}, {"vtk_final", false}, {"shape_metrics", false}, {"plots", false}};
   doc["threads"] = 1;
+  const fs::path dir = test_dir(doc, "zz_tiny.json");
   const fs::path f = dir / "zz_tiny.json";
-  std::ofstream(f) << doc.dump(2);
   const fs::path out = dir / "out";
   const auto r = run_cli("compare " + f.string() + " --out " + out.string() +
                          " --vary method=zhu_zhao_2019,harmon_2020 --threads 1 --quiet");
@@ -229,8 +227,10 @@ TEST(Methods, APresetThatChangesNothingSaysSo) {
 #if !CRUMBLE_WITH_BULLET
   GTEST_SKIP() << "needs Bullet";
 #endif
-  const fs::path dir = test_dir();
   const std::string rigid = kSource + "/scenarios/oedometer_rigid_quick.json";
+  Json doc = load_scenario_file(rigid);
+  doc["engine"].erase("solver_iterations");
+  const fs::path dir = test_dir(doc, "rigid_no_iterations.json");
   const std::string why =
       "note: fidelity 'fast' changes nothing: every key it governs here is already set (engine.solver_iterations "
       "given by the scenario or --set)";
@@ -238,7 +238,7 @@ TEST(Methods, APresetThatChangesNothingSaysSo) {
   ASSERT_EQ(v.status, 0) << v.output;
   EXPECT_NE(v.output.find(why), std::string::npos) << v.output;
   // A run (8 grains, 20 steps) says it on stderr and records it in summary.json.
-  const fs::path out = dir / "run";
+  const fs::path out = dir / "out";
   const auto r = run_cli("run " + rigid + " --set fidelity=fast --set packing.count=8 --set simulation.max_steps=20 " +
                          "--set output.plots=false --set output.vtk_final=false --out " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
@@ -251,10 +251,7 @@ TEST(Methods, APresetThatChangesNothingSaysSo) {
   EXPECT_TRUE(f.at("sets").empty());
   EXPECT_NE(f.at("note").get<std::string>().find("already set"), std::string::npos);
   // With the key left out the same preset acts, and says what it set.
-  Json doc = load_scenario_file(rigid);
-  doc["engine"].erase("solver_iterations");
   const fs::path f2 = dir / "rigid_no_iterations.json";
-  std::ofstream(f2) << doc.dump(2);
   const auto acts = run_cli("validate " + f2.string() + " --set fidelity=fast");
   EXPECT_NE(acts.output.find("fidelity 'fast' sets engine.solver_iterations=300"), std::string::npos) << acts.output;
 }
