@@ -511,6 +511,7 @@ Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, 
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
   j["notes"] = notes_of(sc);
+  for (auto it = sc.presets.begin(); it != sc.presets.end(); ++it) j[it.key()] = it.value();
   if (!st.changed_on_resume.empty()) j["resume_changes"] = st.changed_on_resume;
   if (const AnalysisExecutor* ex = sc.sim->analysis_executor()) {
     j["analysis_ranks"] = ex->ranks();

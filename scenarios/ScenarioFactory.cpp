@@ -11,6 +11,7 @@
 #include "base/Format.h"
 #include "scenarios/Fidelity.h"
 #include "scenarios/InputChecks.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Registry.h"
 #include "output/VtkWriter.h"
 #include "scenarios/Walls.h"
@@ -279,16 +280,60 @@ EngineContext context_from(const Config& root, Json& doc, const BuildOptions& op
   return ctx;
 }
 
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// What the method set, as notes and as the summary's record.
+void report_method(const PresetReport& m, Scenario& sc) {
+  if (m.name.empty()) return;
+  for (const auto& w : m.set) sc.notes.push_back("method '" + m.name + "' sets " + w);
+  if (!m.left.empty())
+    sc.notes.push_back("method '" + m.name + "' leaves " + joined(m.left) + " as the scenario or --set gives them");
+  sc.presets["method"] = {{"name", m.name}, {"sets", m.set}, {"left_as_given", m.left}};
+}
+
+// What the fidelity preset set and left, and why it changed nothing when it did not.
+void report_fidelity(const PresetReport& f, const std::string& method, Scenario& sc) {
+  if (f.name.empty()) return;
+  const std::string who = "fidelity '" + f.name + "'";
+  for (const auto& w : f.set) sc.notes.push_back(who + " sets " + w);
+  std::string why;
+  if (!f.left.empty()) why = joined(f.left) + " given by the scenario or --set";
+  if (!f.left_by_method.empty())
+    why += (why.empty() ? "" : "; ") + joined(f.left_by_method) + " set by method '" + method + "'";
+  if (f.governed == 0)
+    sc.notes.push_back(who + " changes nothing: it has no knob for the engine, breakage model and fragment builder "
+                             "this scenario selects (crumble list)");
+  else if (f.set.empty())
+    sc.notes.push_back(who + " changes nothing: every key it governs here is already set (" + why + ")");
+  else if (!why.empty())
+    sc.notes.push_back(who + " leaves " + why);
+  Json j = {{"preset", f.name}, {"sets", f.set}, {"left_as_given", f.left}, {"left_as_method_set", f.left_by_method},
+            {"changes_nothing", f.set.empty()}};
+  if (f.set.empty()) j["note"] = sc.notes.back();
+  sc.presets["fidelity"] = j;
+}
+
+void apply_presets(Json& doc, Scenario& sc) {
+  const PresetReport m = apply_method(doc);
+  report_method(m, sc);
+  report_fidelity(apply_fidelity_report(doc, m), m.name, sc);
+}
+
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
   for (const auto& o : opt.overrides) apply_override_lapsing(doc, o);
   if (!doc.is_object()) throw ConfigError(opt.source_name, "a scenario must be a JSON object");
   Scenario sc;
-  // The preset fills in knobs before anything reads the document, so the file's own values and
-  // --set (already applied) win over it.
-  for (const auto& w : apply_fidelity(doc)) sc.notes.push_back("fidelity '" + doc["fidelity"].get<std::string>() + "' sets " + w);
+  // The method, then the preset, fill in values before anything reads the document, so the
+  // file's own values and --set (already applied) win over both, and the method's over the preset's.
+  apply_presets(doc, sc);
   Config root(doc);
+  if (root.has("method")) root.accept("method");
   if (root.has("fidelity")) root.accept("fidelity");
   const EngineContext ctx = context_from(root, doc, opt, sc);
   const int dim = ctx.dimension;

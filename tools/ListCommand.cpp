@@ -1,9 +1,10 @@
 // `crumble list [--options NAME [--markdown]]`: the registered implementations of each seam,
-// the presets, and the option table an implementation declares.
+// the methods and presets, and the option table an implementation declares.
 #include <iostream>
 
 #include "base/Errors.h"
 #include "scenarios/Fidelity.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Registry.h"
 #include "tools/OptionDocs.h"
 #include "tools/Subcommand.h"
@@ -53,6 +54,7 @@ class ListCommand : public Subcommand {
     list_table("fragment builders", fragment_builders());
     for (const auto& n : not_compiled())
       std::cout << "  (" << n.seam << " " << n.name << " not available: " << n.reason << ")\n";
+    std::cout << methods_text();
     std::cout << fidelity_text();
     std::cout << "crumble list --options NAME: each option's type, default, range and meaning\n";
     return 0;

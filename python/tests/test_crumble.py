@@ -37,7 +37,7 @@ def test_version_is_the_cmake_project_version():
 
 def test_registry_matches_crumble_list():
     text = cli("list")
-    blocks = re.split(r"^(engines|breakage models|fragment builders|fidelity presets.*):$", text, flags=re.M)
+    blocks = re.split(r"^(engines|breakage models|fragment builders|methods|fidelity presets)\b.*:$", text, flags=re.M)
     listed = {blocks[i]: re.findall(r"^  (\w+) — ", blocks[i + 1], flags=re.M) for i in range(1, len(blocks) - 1, 2)}
     reg = crumble.registry()
     assert [e.name for e in reg.engines] == listed["engines"]
@@ -45,6 +45,10 @@ def test_registry_matches_crumble_list():
     assert [b.name for b in reg.builders] == listed["fragment builders"]
     assert reg.criteria["stress"] == ("max_principal", "von_mises", "tresca")
     assert reg.presets["names"] == ["fast", "balanced", "accurate"]
+    assert [m["name"] for m in reg.methods] == listed["methods"] == ["zhu_zhao_2019", "harmon_2020"]
+    for m in reg.methods:
+        listed_settings = re.findall(r"^      (\S+) = (.+?)   \(", text.split("  " + m["name"] + " — ")[1], flags=re.M)
+        assert [p for p, _ in listed_settings[:len(m["settings"])]] == [s["path"] for s in m["settings"]], m["name"]
     for impl in reg.engines + reg.models + reg.builders:
         if impl.options:
             table = cli("list", "--options", impl.name)

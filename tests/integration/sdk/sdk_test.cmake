@@ -12,6 +12,7 @@ file(REMOVE_RECURSE ${WORK})
 set(prefix ${WORK}/prefix)
 step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 foreach(f bin/crumble include/crumble/core/BreakageModel.h include/crumble/scenarios/Plugins.h
+          include/crumble/scenarios/Methods.h
           include/crumble/crumble_config.h lib/cmake/crumble/crumbleConfig.cmake)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "cmake --install did not install ${f}")
@@ -53,6 +54,9 @@ set(plugin ${WORK}/build/diametral_split.so)
 step("crumble --plugin ... list" ${prefix}/bin/crumble --plugin ${plugin} list)
 if(NOT step_output MATCHES "diametral_split")
   message(FATAL_ERROR "the plugin's model is not listed:\n${step_output}")
+endif()
+if(NOT step_output MATCHES "diametral_split_lsdem — ")
+  message(FATAL_ERROR "the plugin's method is not listed:\n${step_output}")
 endif()
 
 # A 2 mm grain between platens: with a Weibull modulus of 1000 at d_c = d the strength is
