@@ -105,6 +105,9 @@ struct SettleProgress {
   double last_platen = 0;    // m: platen position at the end of the last completed window
   double dt = 0;             // s: the settling's time step
   double mean_diameter = 0;  // m: the grains' mean equivalent diameter (convergence scale)
+  // Pa: the platen stress after the first step and the largest since (a file packing relaxed
+  // on another engine than the one that built it starts with that engine's overlaps).
+  double stress_first = 0, stress_max = 0;
 };
 
 class Simulation {

@@ -339,6 +339,7 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   const int dim = ctx.dimension;
   read_packing(root, dim, sc, ctx);
   Implementations im = make_implementations(root, dim, sc, ctx);
+  decide_relaxation(sc.packing, sc.engine_name);
 
   SimulationSettings ss = simulation_from(root, sc.threads);
   if (!ss.auto_reduce_dt)

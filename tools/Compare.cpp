@@ -602,7 +602,9 @@ int build_shared_packing(const CompareRequest& req, const RunRequest& base, cons
   header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
                    (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
                    fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
-                   " s); every combination starts from packing.json, SHA-256 " + packing_hash + ".");
+                   " s); every combination starts from packing.json, SHA-256 " + packing_hash +
+                   ". A combination on another engine first relaxes it on its own engine under the settling stress "
+                   "(packing.relax auto; what it did is in its summary.json, relax_*).");
   return 0;
 }
 
