@@ -174,7 +174,7 @@ OutputCsv psd_summary_csv() {
 
 OutputCsv load_displacement_csv() {
   return {"load_displacement.csv",
-          "closed containers, at the end, from series.csv: the platen's load–displacement curve",
+          "every run, at the end, from series.csv: the platen's load–displacement curve",
           {{"platen_displacement_m", "m", "platen travel from its first sample"},
            {"platen_force_N", "N", "platen force"}}};
 }
@@ -397,13 +397,13 @@ std::vector<SummaryKey> simulation_keys() {
 
 std::vector<SummaryKey> writer_keys() {
   return {
-      {"k0_final", "1", "the last defined K0 of series.csv", "closed containers with side walls"},
+      {"k0_final", "1", "the last defined K0 of series.csv", "closed containers, once K0 is defined"},
       {"mean_circularity_final", "1", "shape.csv's last mean circularity", "2D, output.shape_metrics"},
       {"mean_aspect_ratio_final", "1", "shape.csv's last mean aspect ratio", "2D, output.shape_metrics"},
       {"mean_sphericity_final", "1", "shape.csv's last mean sphericity", "3D, output.shape_metrics"},
       {"mean_zingg_ei_final", "1", "shape.csv's last mean Zingg EI", "3D, output.shape_metrics"},
       {"mean_zingg_fi_final", "1", "shape.csv's last mean Zingg FI", "3D, output.shape_metrics"},
-      {"jaw_<figure>", "", "the jaw crusher's geometry: jaw_plate_length_m, jaw_plate_height_m, jaw_css_m, "
+      {"jaw_<figure>", "m, °, 1", "the jaw crusher's geometry: jaw_plate_length_m, jaw_plate_height_m, jaw_css_m, "
                            "jaw_oss_m, jaw_feed_opening_m (m), jaw_cycles, jaw_swing_amplitude_deg (°)",
        "jaw crusher scenes"},
       {"product_psd_mass_kg", "kg", "mass of product_psd.csv: product and removed fines", "open scenes"},
@@ -411,9 +411,10 @@ std::vector<SummaryKey> writer_keys() {
       {"product_sieve_min_m", "m", "smallest sieve size of the product", "open scenes with a product"},
       {"product_sieve_max_m", "m", "largest sieve size of the product", "open scenes with a product"},
       {"diameter_m", "m", "the grain's equivalent diameter", "single-grain runs"},
-      {"max_platen_force_N", "N", "largest platen force", "single-grain runs; closed containers with a "
-                                                          "load–displacement curve"},
-      {"displacement_at_max_force_m", "m", "platen travel at the largest force", "the same"},
+      {"max_platen_force_N", "N", "largest platen force", "single-grain runs; other runs with a load–displacement "
+                                                          "curve"},
+      {"displacement_at_max_force_m", "m", "platen travel at the largest force", "runs with a load–displacement "
+                                                                                  "curve"},
       {"crushing_force_N", "N", "force at which the grain broke (peridynamics: force_at_split_N, else the "
                                 "largest contact force)", "single-grain runs that broke"},
       {"crushing_stress_Pa", "Pa", "equivalent stress at failure", "single-grain runs that broke, stress models"},
@@ -424,34 +425,24 @@ std::vector<SummaryKey> writer_keys() {
       {"ncl_loglog_slope", "1", "slope of log e against log σ over σ ≥ 0.3 σ_max (Zhu & Zhao 2019 §5)",
        "where the fit is defined"},
       {"ncl_compression_index", "1", "C_c = −de/dlog10 σ over the same range", "where the fit is defined"},
-      {"fractal_dimension_final", "1", "fractal dimension of the final sizes", "runs with breakage"},
+      {"fractal_dimension_final", "1", "fractal dimension of the final sizes", "runs with breakage, where defined"},
       {"relative_breakage_final", "1", "Hardin's B_r of the final PSD against the initial", "where defined"},
       {"void_ratio_at_stress_<Pa>_Pa", "1", "void ratio at each `output.psd_at_stress` level reached",
-       "closed containers, levels reached"},
+       "levels reached"},
       {"void_ratio_at_strain_<value>", "1", "void ratio at each `output.psd_at_strain` level reached",
-       "closed containers, levels reached"},
-      {"psd_d50_final_m", "m", "d50 of the final PSD by mass (removed fines at size 0)", "closed containers"},
-      {"psd_d10_final_m", "m", "d10 of the final PSD", "closed containers"},
-      {"psd_d60_final_m", "m", "d60 of the final PSD", "closed containers"},
-      {"psd_uniformity_final", "1", "d60/d10 of the final PSD", "closed containers, where defined"},
+       "levels reached"},
+      {"psd_d50_final_m", "m", "d50 of the final PSD by mass (removed fines at size 0)", "where defined"},
+      {"psd_d10_final_m", "m", "d10 of the final PSD", "where defined"},
+      {"psd_d60_final_m", "m", "d60 of the final PSD", "where defined"},
+      {"psd_uniformity_final", "1", "d60/d10 of the final PSD", "where defined"},
       {"fines_fraction_final", "1", "mass fraction of removed fines and grains finer than fines_size_m",
-       "closed containers"},
-      {"fines_size_m", "m", "the fines size of fines_fraction_final", "closed containers"},
+       "when any solid is left or removed"},
+      {"fines_size_m", "m", "the fines size of fines_fraction_final: the larger of screening.min_diameter and "
+                            "simulation.fines_diameter", ""},
       {"layer_<k>_passing_percent_at_0.025_dmax", "%", "layer k's mass finer than 0.025 d_max", "output.psd_layers"},
       {"layer_<k>_passing_percent_at_0.25_dmax", "%", "layer k's mass finer than 0.25 d_max", "output.psd_layers"},
       {"layer_<k>_largest_fragment_m", "m", "layer k's largest grain", "output.psd_layers"}};
 }
-
-std::string cell(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '|') out += '\\';
-    out += c;
-  }
-  return out;
-}
-
-std::string unit_cell(const std::string& u) { return u.empty() ? "text" : u == "1" ? "–" : u; }
 
 }  // namespace
 
@@ -502,38 +493,6 @@ bool matches_declared_name(const std::string& pattern, const std::string& name) 
 bool summary_key_declared(const std::string& key) {
   return std::any_of(summary_keys().begin(), summary_keys().end(),
                      [&](const SummaryKey& k) { return matches_declared_name(k.name, key); });
-}
-
-std::string output_reference_markdown() {
-  std::string out;
-  for (const auto& f : output_csv_files()) {
-    out += "### `" + f.file + "`\n\n" + cell(f.when) + ".\n\n| column | unit | meaning |\n|---|---|---|\n";
-    for (const auto& c : f.columns)
-      out += "| `" + cell(c.name) + "` | " + unit_cell(c.unit) + " | " + (c.only.empty() ? "" : "(" + c.only + ") ") +
-             cell(c.meaning) + " |\n";
-    out += "\n";
-  }
-  out += "### `summary.json`\n\nEvery run, at the end; nested keys by their path with dots.\n\n"
-         "| key | unit | meaning | written |\n|---|---|---|---|\n";
-  for (const auto& k : summary_keys())
-    out += "| `" + cell(k.name) + "` | " + unit_cell(k.unit) + " | " + cell(k.meaning) + " | " +
-           (k.when.empty() ? "always" : cell(k.when)) + " |\n";
-  return out;
-}
-
-std::string output_reference_text() {
-  std::string out;
-  for (const auto& f : output_csv_files()) {
-    out += f.file + ": " + f.when + "\n";
-    for (const auto& c : f.columns)
-      out += "  " + c.name + " [" + unit_cell(c.unit) + "]" + (c.only.empty() ? "" : " (" + c.only + ")") + "\n      " +
-             c.meaning + "\n";
-  }
-  out += "summary.json: every run, at the end\n";
-  for (const auto& k : summary_keys())
-    out += "  " + k.name + " [" + unit_cell(k.unit) + "]" + (k.when.empty() ? "" : " (" + k.when + ")") + "\n      " +
-           k.meaning + "\n";
-  return out;
 }
 
 }  // namespace crumble

@@ -1,8 +1,8 @@
 // The one declaration of every table a run, `crumble compare` and `crumble sweep` write: each
 // CSV file's columns and each summary.json key, with its unit and meaning. The writers take
 // their headers (and summary.json its fixed keys) from these tables, and `crumble list
-// --outputs --markdown` prints them as the reference docs/output.md holds between its
-// markers (scripts/update-option-docs.sh refreshes it; tests/integration/output_reference
+// --outputs --markdown` prints them (tools/OptionDocs.h) as the reference docs/output.md holds
+// between its markers (scripts/update-option-docs.sh refreshes it; tests/integration/output_reference
 // checks both), so a column cannot be written without being documented.
 #pragma once
 #include <functional>
@@ -58,10 +58,5 @@ bool summary_key_declared(const std::string& key);
 // True when `name` is the declared `pattern` or a member of its family (`<…>` matches one or
 // more characters).
 bool matches_declared_name(const std::string& pattern, const std::string& name);
-
-// The reference of docs/output.md: one Markdown table per CSV file, then summary.json's keys.
-std::string output_reference_markdown();
-// The same as text for a terminal.
-std::string output_reference_text();
 
 }  // namespace crumble

@@ -1,10 +1,9 @@
 // `crumble list [--options NAME [--markdown]]`: the registered implementations of each seam,
 // the presets, and the option table an implementation declares. `crumble list --outputs
-// [--markdown]`: every column and summary.json key a run writes (output/OutputReference.h).
+// [--markdown]`: every column and summary.json key a run writes (output/OutputReference.h, tools/OptionDocs.h).
 #include <iostream>
 
 #include "base/Errors.h"
-#include "output/OutputReference.h"
 #include "scenarios/Fidelity.h"
 #include "scenarios/Registry.h"
 #include "tools/OptionDocs.h"
