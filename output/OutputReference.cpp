@@ -19,9 +19,9 @@ OutputCsv series_csv() {
            {"dt_s", "s", "time step"},
            {"platen_stress_Pa", "Pa", "vertical stress the grains push the platen with: its force over the container's "
                                       "cross-section (2D: N/m over the width)"},
-           {"target_stress_Pa", "Pa", "stress the loading commands (a stress ramp or servo; 0 under a strain rate)"},
+           {"target_stress_Pa", "Pa", "stress a `stress_ramp` loading commands at this time (0 under other loading modes)"},
            {"axial_strain", "1", "platen displacement over the initial sample height"},
-           {"void_ratio", "1", "pore volume over solid volume below the platen (open scenes: of the scene's box)"},
+           {"void_ratio", "1", "pore volume over solid volume below the platen (removed fines stay in the solid volume)"},
            {"grains", "1", "grains in the engine"},
            {"breakage_events", "1", "breakage events so far"},
            {"analyses", "1", "breakage analyses so far"},
@@ -227,7 +227,7 @@ OutputCsv comparison_csv() {
               "full precision (comparison.md shows the same for a person)",
               {{"<path>", "", "one column per varied path (`--vary PATH=…`): the combination's value"},
                {"folder", "", "the combination's run folder"},
-               {"status", "", "ok, failed, interrupted, …"},
+               {"status", "", "ok, failed, interrupted, bad input, crashed or not run"},
                {"exit_status", "1", "exit status of the run"},
                {"reason", "", "why a run did not finish (empty for ok)"},
                {"engine", "", "summary.json engine"},
@@ -260,7 +260,7 @@ OutputCsv sweep_csv() {
               "(pareto.md shows the same for a person)",
               {{"<path>", "", "one column per swept path (`--param`): the setting's value"},
                {"folder", "", "the setting's run folder"},
-               {"status", "", "ok, failed, interrupted, …"},
+               {"status", "", "ok, failed, interrupted, bad input, crashed or not run"},
                {"exit_status", "1", "exit status of the run"},
                {"reason", "", "why a run did not finish (empty for ok)"},
                {"reference", "1", "1 for the reference setting"},
@@ -270,8 +270,8 @@ OutputCsv sweep_csv() {
   c.columns.push_back({"<metric>", "", "two columns per chosen metric (`--metric`): `<metric>_<unit>` (`<metric>` "
                                        "for a pure number), its value, and `<metric>_rel_error`, its relative "
                                        "error against the reference"});
-  c.columns.push_back({"error", "1", "the setting's error: the largest relative error of its metrics"});
-  c.columns.push_back({"on_front", "1", "1 when the setting is on the Pareto front of cost and error"});
+  c.columns.push_back({"error", "1", "the setting's error: the largest relative error of its metrics (empty when none is defined)"});
+  c.columns.push_back({"on_front", "1", "1 when the setting is on the front of cost (wall_seconds) and error: no other setting is cheaper and as accurate or more"});
   return c;
 }
 
@@ -299,7 +299,7 @@ std::vector<SummaryKey> run_keys() {
       {"analyses", "1", "breakage analyses", "", &field<&RunSummary::analyses>},
       {"analyses_skipped", "1", "grains screened in whose analysis the skip rule spared", "",
        &field<&RunSummary::analyses_skipped>},
-      {"fragment_fallbacks", "1", "breakages the fragment builder built by its fallback", "",
+      {"fragment_fallbacks", "1", "documented fallbacks the fragment builders took", "",
        &field<&RunSummary::fragment_fallbacks>},
       {"dt_reductions", "1", "times the time step was reduced", "", &field<&RunSummary::dt_reductions>},
       {"mass_initial_kg", "kg", "solid mass at the start (2D: per m of thickness)", "",
@@ -374,16 +374,16 @@ std::vector<SummaryKey> simulation_keys() {
       {"analyses_failed_<reason>", "1",
        "the same per reason: the error's first words, lower case joined by `_`", "a failed analysis"},
       {"fines_mass_fraction", "1", "mass removed as fines over all the solid that entered (initial and fed)", ""},
-      {"guard_max_overlap_fraction", "1", "largest overlap over diameter the guards saw", ""},
-      {"guard_max_energy_ratio", "1", "largest kinetic over work-done energy ratio the guards saw", ""},
-      {"guard_small_grain_overlaps", "1", "small grains found overlapping too far", ""},
-      {"guard_small_grains_removed", "1", "small grains removed by that guard", ""},
+      {"guard_max_overlap_fraction", "1", "largest overlap over the smaller grain's diameter the guards saw", ""},
+      {"guard_max_energy_ratio", "1", "largest kinetic energy over the energy that can have entered (initial kinetic energy, platen work, weight falling the container's height)", ""},
+      {"guard_small_grain_overlaps", "1", "contacts over the overlap limit whose smaller grain is tiny (counted instead of stopping the run)", ""},
+      {"guard_small_grains_removed", "1", "tiny grains that left a closed container, taken out as fines", ""},
       {"engine_<figure>", "1",
        "the engine's own counts (Engine::summary_figures): bullet and ode compound_shapes, compound_pieces, "
        "compound_failures; ode concave_shapes_as_hull", "engines that report them"},
-      {"engine_solver_iterations_max", "1", "the contact solver's iteration limit", "engines with an iterative "
+      {"engine_solver_iterations_max", "1", "most iterations the contact solver took in a loading step", "engines with an iterative "
                                                                                     "contact solver"},
-      {"engine_solver_limited_fraction", "1", "share of the loading steps the solver stopped at its limit",
+      {"engine_solver_limited_fraction", "1", "share of the loading steps the solver stopped at its iteration limit before its tolerance",
        "engines with an iterative contact solver"},
       {"engine_solver_limited_change_max", "1", "largest relative impulse change left at the limit",
        "engines with an iterative contact solver"},
