@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -44,19 +43,6 @@ inline std::string scenario_file(const std::string& suite, const std::string& na
 inline std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
   return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
-// The first line where a generated block (`code`) and what a document holds (`docs`) differ,
-// both shown.
-inline std::string first_difference(const std::string& code, const std::string& docs) {
-  std::istringstream a(code), b(docs);
-  std::string la, lb;
-  for (int n = 1;; ++n) {
-    const bool ha = static_cast<bool>(std::getline(a, la)), hb = static_cast<bool>(std::getline(b, lb));
-    if (!ha && !hb) return "(no difference)";
-    if (!ha || !hb || la != lb)
-      return "line " + std::to_string(n) + " of the block:\n  code: " + (ha ? la : "(end)") + "\n  docs: " + (hb ? lb : "(end)");
-  }
 }
 
 // Index of column `name` in the header row of a CSV table (crumble::read_csv); a test

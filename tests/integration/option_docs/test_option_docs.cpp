@@ -17,6 +17,7 @@
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
 #include "tests/support/CliRunner.h"
+#include "tests/support/DocBlocks.h"
 
 namespace fs = std::filesystem;
 using crumble::testing_support::run_cli;

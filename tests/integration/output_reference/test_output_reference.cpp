@@ -19,6 +19,7 @@
 #include "tools/OptionDocs.h"
 #include "output/Writers.h"
 #include "tests/support/CliRunner.h"
+#include "tests/support/DocBlocks.h"
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
