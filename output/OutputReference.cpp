@@ -319,6 +319,18 @@ std::vector<SummaryKey> run_keys() {
       {"resumed_from_step", "1", "step the loading resumed at", "`--resume` in the loading"},
       {"resumed_from_settle_step", "1", "settling step the packing resumed at", "`--resume` in the settling"},
       {"resume_changes", "", "the settings changed on `--resume` (array)", "`--resume` with changed settings"},
+      {"notes", "", "every note of the run, printed or not: `note`, `setting` (its JSON path, when about one), "
+                    "`deliberate` (the scenario's reason, when declared; then not printed)", ""},
+      {"method", "", "what the scenario's `method` set: `name`, `sets` (path = value), `left_as_given`",
+       "scenarios with a `method`"},
+      {"fidelity", "", "what the fidelity preset did: `preset`, `sets`, `left_as_given`, `left_as_method_set`, "
+                       "`changes_nothing`, `note`", "scenarios with a `fidelity` preset"},
+      {"packing_relaxed", "1", "1 when the file packing relaxed on this engine before loading (`packing.relax`)",
+       "file packings"},
+      {"relax_<figure>", "",
+       "what the relaxation did: steps, converged (1/0), platen_stress_first_Pa / _max_Pa / _final_Pa (Pa), "
+       "grain_displacement_max_m / _mean_m (m, from the file's positions), void_ratio_before / _after",
+       "relaxed file packings"},
       {"analysis_ranks", "1", "MPI ranks running analyses", "runs with an analysis executor (MPI)"},
       {"analyses_per_rank", "1", "analyses per rank (array)", "runs with an analysis executor (MPI)"},
       {"analysis_seconds_per_rank", "s", "analysis seconds per rank (array)", "runs with an analysis executor (MPI)"},
