@@ -68,6 +68,12 @@ class Engine {
   // (packing generation: frictionless settling gives a dense packing). Returns false when
   // the engine cannot, which is the default for scale != 1.
   virtual bool set_friction_scale(double scale) { return scale == 1.0; }
+  // Relaxing a packing another engine built (scenarios/Packing.h): an explicit engine meets the
+  // other engine's overlaps as stored elastic energy and must dissipate it while the grains push
+  // apart, or the packing bursts. `on` adds a damping that makes every grain overdamped until
+  // called with false. Returns false when the engine needs none (Bullet and ODE remove overlaps
+  // by position correction, without adding momentum), which is the default.
+  virtual bool set_relaxation_damping(bool on) { (void)on; return false; }
 
   // Copy engine poses and velocities into the records (matched by id).
   virtual void read_state(std::span<Grain> grains) const = 0;

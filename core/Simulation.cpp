@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -365,6 +366,7 @@ RunSummary Simulation::run(const Progress& progress) {
 // first time step checked against the engine's stable step.
 RunState Simulation::start_run(RunSummary& sum) {
   RunState st;
+  notes_.clear();
   if (resumed_) {
     sum.grains_initial = resumed_from_.grains_initial;
     sum.mass_initial = resumed_from_.mass_initial;
@@ -484,19 +486,23 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   summarise_solver(sum);
 }
 
-void Simulation::summarise_solver(RunSummary& sum) const {
+void Simulation::summarise_solver(RunSummary& sum) {
   if (solver_.steps <= 0) return;
   const double limited = static_cast<double>(solver_.limited) / static_cast<double>(solver_.steps);
   sum.extra["engine_solver_iterations_max"] = solver_.iterations_max;
   sum.extra["engine_solver_limited_fraction"] = limited;
   sum.extra["engine_solver_limited_change_max"] = solver_.limited_change_max;
-  // Unconverged contact forces change the result (docs/validation.md, Zhu & Zhao §5): say so.
-  if (limited >= 0.1)
-    std::cerr << "crumble: note: the contact solver stopped at its iteration limit (" << solver_.iterations_max
-              << ") before its tolerance in " << std::lround(100 * limited)
-              << " % of the loading steps (relative impulse change left: up to " << solver_.limited_change_max
-              << "); its contact forces are less converged than engine.solver_tolerance asks: raise engine.solver_iterations for converged forces (counted in "
-                 "summary.json: engine_solver_limited_fraction)\n";
+  // Unconverged contact forces change the result (docs/validation.md, Zhu & Zhao §5): say so,
+  // unless the scenario declares its iteration limit deliberate.
+  if (limited < 0.1) return;
+  std::ostringstream text;
+  text << "the contact solver stopped at its iteration limit (" << solver_.iterations_max << ") before its tolerance in "
+       << std::lround(100 * limited) << " % of the loading steps (relative impulse change left: up to "
+       << solver_.limited_change_max
+       << "); its contact forces are less converged than engine.solver_tolerance asks: raise "
+          "engine.solver_iterations for converged forces (counted in summary.json: engine_solver_limited_fraction)";
+  notes_.push_back(make_note(deliberate_, "/engine/solver_iterations", text.str()));
+  print_note(notes_.back());
 }
 
 // Counted by the error's leading word (the text before its first ':', e.g. "convex_hull"),

@@ -14,6 +14,7 @@
 #include "core/FragmentBuilder.h"
 #include "core/Guards.h"
 #include "core/Loading.h"
+#include "core/Notes.h"
 #include "core/Observer.h"
 #include "core/OpenScene.h"
 #include "core/Schedule.h"
@@ -104,6 +105,9 @@ struct SettleProgress {
   double last_platen = 0;    // m: platen position at the end of the last completed window
   double dt = 0;             // s: the settling's time step
   double mean_diameter = 0;  // m: the grains' mean equivalent diameter (convergence scale)
+  // Pa: the platen stress after the first step and the largest since (a file packing relaxed
+  // on another engine than the one that built it starts with that engine's overlaps).
+  double stress_first = 0, stress_max = 0;
 };
 
 class Simulation {
@@ -187,6 +191,11 @@ class Simulation {
   // Largest margins the guards have seen so far in this process.
   const GuardReading& guard_margins() const { return guard_max_; }
 
+  // The scenario's deliberate settings (core/Notes.h): the run's notes about them are not
+  // printed. notes(): every note of the last run, printed or not, for summary.json.
+  void set_deliberate(DeliberateSettings d) { deliberate_ = std::move(d); }
+  const std::vector<Note>& notes() const { return notes_; }
+
  private:
   double area() const;
   double time_step(double stress) const;
@@ -208,7 +217,7 @@ class Simulation {
   double next_time_step(const RunState& st);
   void step_once(double dt, RunState& st);
   void fill_summary(RunSummary& sum, const RunState& st);
-  void summarise_solver(RunSummary& sum) const;
+  void summarise_solver(RunSummary& sum);
   void check_breakage(const RunState& st);
   BreakageBatch select_candidates();
   void run_analyses(BreakageBatch& b);
@@ -261,6 +270,8 @@ class Simulation {
   bool initial_elastic_counted_ = false;  // account_step counted the initial overlaps' energy
   double reference_diameter_ = 0;
   GuardReading guard_max_;
+  DeliberateSettings deliberate_;
+  std::vector<Note> notes_;
   // The engine's contact solver over this process's loading steps (Engine::solver_report).
   struct SolverTally {
     long steps = 0, limited = 0;  // steps reported; of them stopped at the limit, tolerance unmet

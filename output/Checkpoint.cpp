@@ -200,7 +200,9 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
     j["settling"] = {{"steps", settling->steps},
                      {"last_platen_position", settling->last_platen},
                      {"dt", settling->dt},
-                     {"mean_diameter", settling->mean_diameter}};
+                     {"mean_diameter", settling->mean_diameter},
+                     {"platen_stress_first_Pa", settling->stress_first},
+                     {"platen_stress_max_Pa", settling->stress_max}};
   return j;
 }
 
@@ -385,6 +387,8 @@ Checkpoint read_checkpoint(const std::string& path, const std::string& scenario,
     p.last_platen = s.number("last_platen_position");
     p.dt = s.positive("dt");
     p.mean_diameter = s.positive("mean_diameter");
+    p.stress_first = s.number("platen_stress_first_Pa", 0);  // absent in checkpoints before 0.2.0
+    p.stress_max = s.number("platen_stress_max_Pa", 0);
     cp.settling = p;
   }
   if (c.has("run")) {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/Measures.h"
+#include "output/OutputReference.h"
 #include "output/Writers.h"
 
 namespace crumble {
@@ -32,7 +33,7 @@ LoadDisplacement write_load_displacement_csv(const std::string& dir) {
     }
   LoadDisplacement ld = load_displacement(h, f);
   std::ostringstream os;
-  os << std::setprecision(10) << "platen_displacement_m,platen_force_N\n";
+  os << std::setprecision(10) << csv_header("load_displacement.csv") << '\n';
   for (std::size_t i = 0; i < ld.load.size(); ++i) os << ld.displacement[i] << ',' << ld.load[i] << '\n';
   write_file_atomic(dir + "/load_displacement.csv", os.str());
   return ld;
@@ -85,8 +86,7 @@ void LayerPsdWriter::on_finish(const Simulation& sim, const RunState&, RunSummar
     largest[k] = std::max(largest[k], sizes[k].back());
   }
   std::ostringstream os;
-  os << std::setprecision(10)
-     << "layer,layer_top_m,layer_bottom_m,layer_mass_kg,sieve_diameter_m,percent_passing_by_mass\n";
+  os << std::setprecision(10) << csv_header("psd_layers.csv") << '\n';
   for (int k = 0; k < layers_; ++k) {
     double m = 0;
     for (double x : masses[k]) m += x;

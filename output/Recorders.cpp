@@ -9,6 +9,7 @@
 #include "core/Measures.h"
 #include "core/Simulation.h"
 #include "output/LayerOutputs.h"
+#include "output/OutputReference.h"
 #include "output/Writers.h"
 
 namespace crumble {
@@ -76,7 +77,7 @@ class CompressionRecorder : public Observer {
       n_.push_back(static_cast<std::size_t>(std::atol(rows[i][7].c_str())));
     }
     std::ostringstream os;
-    os << std::setprecision(10) << "platen_stress_Pa,log10_stress,void_ratio,grains\n";
+    os << std::setprecision(10) << csv_header("ncl.csv") << '\n';
     for (std::size_t i = 0; i < stress_.size(); ++i)
       if (stress_[i] > 0) os << stress_[i] << ',' << std::log10(stress_[i]) << ',' << e_[i] << ',' << n_[i] << '\n';
     write_file_atomic(dir_ + "/ncl.csv", os.str());
@@ -114,8 +115,7 @@ class CompressionRecorder : public Observer {
     for (const auto& t : tables)
       if (t.label == "initial") initial = &t;
     std::ostringstream os;
-    os << std::setprecision(10)
-       << "label,platen_stress_Pa,axial_strain,fractal_dimension_by_mass,relative_breakage,breakage_cutoff_m\n";
+    os << std::setprecision(10) << csv_header("psd_summary.csv") << '\n';
     auto cell = [](double v) { return std::isfinite(v) ? fmt_num(v) : std::string(); };  // never NaN in a file
     for (const auto& t : tables) {
       const double D = fractal_dimension_by_mass(t.sieves, t.passing, dimension);

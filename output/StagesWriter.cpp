@@ -7,16 +7,10 @@
 #include <iomanip>
 #include <sstream>
 
+#include "output/OutputReference.h"
+
 namespace crumble {
 namespace fs = std::filesystem;
-
-namespace {
-const char* kColumns =
-    ",complete,resumed,step,time_s,grains_start,grains,wall_s,wall_total_s,steps,engine_s,"
-    "engine_ms_per_step,analyses,breaking_analyses,analysis_s,mean_analysis_ms,breaking_share_of_analysis_time,"
-    "fragments_s,analyses_total,breakage_events_total";
-
-}  // namespace
 
 StageAxisNames stage_axis_names(StagesWriter::Axis a) {
   return a == StagesWriter::Axis::Strain ? StageAxisNames{"strain_from_percent", "strain_to_percent", "% strain", "percent"}
@@ -25,9 +19,9 @@ StageAxisNames stage_axis_names(StagesWriter::Axis a) {
 
 namespace {
 
+// The declared columns (output/OutputReference.cpp), the axis's bounds first.
 std::string header(StagesWriter::Axis a) {
-  const StageAxisNames n = stage_axis_names(a);
-  return std::string(n.from) + "," + n.to + kColumns;
+  return csv_header("stages.csv", a == StagesWriter::Axis::Strain ? "strain" : "stress");
 }
 
 double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {

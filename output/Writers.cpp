@@ -17,6 +17,7 @@
 #include "base/Format.h"
 #include "geometry/LevelSetGrid.h"
 #include "geometry/ShapeMetrics.h"
+#include "output/OutputReference.h"
 
 namespace crumble {
 
@@ -165,10 +166,7 @@ void check_finite(double v, const char* what) {
 }  // namespace
 
 SeriesWriter::SeriesWriter(const std::string& dir, long resume_step)
-    : csv_(dir + "/series.csv",
-           "time_s,step,dt_s,platen_stress_Pa,target_stress_Pa,axial_strain,void_ratio,grains,breakage_events,"
-           "analyses,platen_height_m,platen_force_N,floor_force_N,k0",
-           resume_step),
+    : csv_(dir + "/series.csv", csv_header("series.csv"), resume_step),
       last_step_(resume_step) {}
 
 double current_k0(const Simulation& sim, const RunState& s) {
@@ -209,12 +207,9 @@ void SeriesWriter::on_finish(const Simulation&, const RunState&, RunSummary& sum
 }
 
 namespace {
+// The common columns, then the model's figures (the family `<figure>`).
 std::string events_header(const std::vector<std::string>& figures) {
-  std::string h =
-      "time_s,step,platen_stress_Pa,grain,diameter_m,generation,wall_ms,outcome,max_force_N,children,child_volumes_m3,"
-      "child_diameters_m,removed_volume_m3,fragment_method";
-  for (const auto& f : figures) h += "," + f;
-  return h;
+  return csv_header("events.csv", "", [&figures](const std::string&) { return figures; });
 }
 }  // namespace
 
@@ -296,7 +291,7 @@ void EventsWriter::on_finish(const Simulation&, const RunState& s, RunSummary&) 
   // Zhu & Zhao 2019 Fig. 12: crushing events per 1 MPa of vertical stress.
   const std::vector<long> per = events_per_increment(stresses, 1e6, s.platen_stress);
   std::ostringstream os;
-  os << "stress_from_MPa,stress_to_MPa,breakage_events\n";
+  os << csv_header("breakage_per_mpa.csv") << '\n';
   for (std::size_t m = 0; m < per.size(); ++m) os << m << ',' << m + 1 << ',' << per[m] << '\n';
   write_file_atomic(dir_ + "/breakage_per_mpa.csv", os.str());
 }
@@ -352,7 +347,7 @@ void PsdWriter::on_start(const Simulation& sim, const RunState& s) {
 
 void PsdWriter::write() const {
   write_file_atomic(dir_ + "/psd.csv",
-                    "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain,step\n" + rows_);
+                    csv_header("psd.csv") + "\n" + rows_);
 }
 
 void PsdWriter::on_sample(const Simulation& sim, const RunState& s) {
@@ -429,11 +424,7 @@ GrainShapeMetrics grain_shape_metrics(const Shape& shape) {
 
 ShapeWriter::ShapeWriter(const std::string& dir, int dimension, long resume_step)
     : dim_(dimension),
-      csv_(dir + "/shape.csv",
-           dimension == 2 ? "time_s,step,axial_strain,platen_stress_Pa,grains,mean_circularity,mean_aspect_ratio,"
-                            "mean_sieve_size_m"
-                          : "time_s,step,axial_strain,platen_stress_Pa,grains,mean_sphericity,mean_EI,mean_FI",
-           resume_step),
+      csv_(dir + "/shape.csv", csv_header("shape.csv", dimension == 2 ? "2D" : "3D"), resume_step),
       last_step_(resume_step) {}
 
 const GrainShapeMetrics& ShapeMetricsCache::get(const Shape::Ptr& shape) {
@@ -497,33 +488,18 @@ Json summary_json(const RunSummary& s, const std::string& scenario, const std::s
   j["fragments"] = fragments;
   j["seed"] = seed;
   j["threads"] = threads;
-  j["wall_seconds"] = s.wall_seconds;
-  j["steps"] = s.steps;
-  j["simulated_time_s"] = s.time;
-  j["grains_initial"] = s.grains_initial;
-  j["grains_final"] = s.grains_final;
-  j["breakage_events"] = s.breakage_events;
-  j["analyses"] = s.analyses;
-  j["analyses_skipped"] = s.analyses_skipped;
-  j["fragment_fallbacks"] = s.fragment_fallbacks;
-  j["dt_reductions"] = s.dt_reductions;
-  j["mass_initial_kg"] = s.mass_initial;
-  j["mass_final_kg"] = s.mass_final;
-  j["mass_removed_kg"] = s.mass_removed;
-  j["void_ratio_initial"] = s.void_ratio_initial;
-  j["void_ratio_final"] = s.void_ratio_final;
-  j["max_platen_stress_Pa"] = s.max_platen_stress;
+  // RunSummary's own fields, by the keys that declare them (output/OutputReference.cpp).
+  // A nested key (`time_breakdown_s.engine`) by its path.
+  for (const auto& k : summary_keys()) {
+    if (!k.value) continue;
+    std::string path = "/" + k.name;
+    std::replace(path.begin(), path.end(), '.', '/');
+    j[Json::json_pointer(path)] = k.value(s);
+  }
   if (s.interrupted) j["interrupted"] = true;
-  j["time_breakdown_s"] = {{"engine", s.timings.engine},     {"contacts", s.timings.contacts},
-                           {"screening", s.timings.screening}, {"analyses", s.timings.analyses},
-                           {"fragments", s.timings.fragments}, {"guards", s.timings.guards},
-                           {"output", s.timings.observers}, {"loop", s.timings.loop}};
   // `output` by writer (Observer::name()): the parts sum to `output`.
   j["time_breakdown_s"]["output_by_writer"] = Json::object();
   for (const auto& [name, seconds] : s.timings.output_by_writer) j["time_breakdown_s"]["output_by_writer"][name] = seconds;
-  // Building the children and putting them into the engine, per breakage event.
-  j["time_breakdown_s"]["fragments_per_event"] =
-      s.breakage_events > 0 ? s.timings.fragments / static_cast<double>(s.breakage_events) : 0.0;
   for (const auto& [k, v] : s.extra) j[k] = v;
   for (const auto& [k, v] : s.extra_arrays) j[k] = v;
   for (auto it = j.begin(); it != j.end(); ++it)
@@ -548,7 +524,7 @@ void ProductWriter::on_finish(const Simulation& sim, const RunState&, RunSummary
   }
   const double total = sim.product_mass() + fines;
   std::ostringstream os;
-  os << std::setprecision(10) << "sieve_m,passing_percent,passing_mass_kg\n";
+  os << std::setprecision(10) << csv_header("product_psd.csv") << '\n';
   if (!product.empty()) {
     // Sieves: the series 1 mm · 2^(k/2) (a √2 series, as laboratory sieves) spanning the product.
     const int k0 = static_cast<int>(std::floor(2 * std::log2(smin / 1e-3))) - 1;
@@ -563,7 +539,7 @@ void ProductWriter::on_finish(const Simulation& sim, const RunState&, RunSummary
   }
   write_file_atomic(dir_ + "/product_psd.csv", os.str());
   std::ostringstream pr;
-  pr << std::setprecision(10) << "time,grain,origin,generation,equivalent_diameter_m,sieve_m,mass_kg\n";
+  pr << std::setprecision(10) << csv_header("product.csv") << '\n';
   for (const auto& p : product)
     pr << p.time << ',' << p.id << ',' << p.origin << ',' << p.generation << ',' << p.diameter << ',' << p.sieve << ','
        << p.mass << '\n';

@@ -15,6 +15,7 @@
 #include "crumble_config.h"
 #include "run/RunPipeline.h"
 #include "scenarios/Fidelity.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Registry.h"
 
 namespace py = pybind11;
@@ -88,6 +89,13 @@ std::string registry_json() {
   for (const auto& n : not_compiled()) missing.push_back({{"seam", n.seam}, {"name", n.name}, {"reason", n.reason}});
   j["sections"] = sections;
   j["presets"] = {{"names", fidelity_presets()}, {"knobs", presets}};
+  Json methods_list = Json::array();
+  for (const auto& m : methods().entries()) {
+    Json settings = Json::array();
+    for (const auto& st : m.settings) settings.push_back({{"path", st.path}, {"value", st.value}, {"source", st.source}});
+    methods_list.push_back({{"name", m.name}, {"description", m.description}, {"settings", settings}});
+  }
+  j["methods"] = methods_list;
   j["not_compiled"] = missing;
   return j.dump();
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
@@ -85,6 +86,29 @@ std::string format_duration(double sec) {
   else if (s < 3600) std::snprintf(b, sizeof b, "%ld m %02ld s", s / 60, s % 60);
   else std::snprintf(b, sizeof b, "%ld h %02ld m", s / 3600, (s % 3600) / 60);
   return b;
+}
+
+std::string format_done(double wall_s, long steps, std::size_t grains, long breakage_events, const std::string& dir) {
+  return "done in " + format_duration(wall_s) + ": " + std::to_string(steps) + " steps, " + std::to_string(grains) +
+         " grains, " + std::to_string(breakage_events) + " breakage events; results in " + dir;
+}
+
+std::string what_to_open(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const fs::path d(dir);
+  std::string figure;
+  for (const char* f : {"ncl.png", "load_displacement.png", "stress_strain.png", "product_psd.png", "psd.png"})
+    if (fs::exists(d / f)) {
+      figure = (d / f).string();
+      break;
+    }
+  const bool scene = fs::exists(d / "scene.pvd");
+  if (figure.empty() && !scene) return "";
+  std::string s = figure.empty() ? "" : "open " + figure + " first";
+  if (scene)
+    s += (figure.empty() ? "open " : ", then ") + (d / "scene.pvd").string() +
+         " in ParaView (the grains at each snapshot; docs/output.md)";
+  return s;
 }
 
 std::string format_progress(const RunState& s, double fraction, double elapsed, double eta) {

@@ -35,4 +35,11 @@ std::string format_progress(const RunState& s, double fraction, double elapsed_s
 // "45 s", "3 m 05 s", "2 h 07 m".
 std::string format_duration(double seconds);
 
+// The end of a run: "done in 4 m 00 s: 250 steps, 200 grains, 0 breakage events; results in DIR".
+std::string format_done(double wall_s, long steps, std::size_t grains, long breakage_events, const std::string& dir);
+// What to look at first in a run folder: its main figure (the first of ncl.png,
+// load_displacement.png, stress_strain.png, product_psd.png, psd.png that exists) and
+// scene.pvd in ParaView; empty when the folder holds neither.
+std::string what_to_open(const std::string& dir);
+
 }  // namespace crumble

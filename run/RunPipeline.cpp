@@ -273,19 +273,11 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// summary.json `representations_built`: what this run built, by kind (base/BuildCounters.h),
-// and the same as one line for the end of the run.
+// summary.json `representations_built`: what this run built, by kind (base/BuildCounters.h).
 Json representations_json(const RepresentationCounts& built) {
   Json j = Json::object();
   for (std::size_t i = 0; i < kRepresentationKinds; ++i) j[to_string(static_cast<Representation>(i))] = built.n[i];
   return j;
-}
-std::string representations_line(const RepresentationCounts& built) {
-  std::string s;
-  for (std::size_t i = 0; i < kRepresentationKinds; ++i)
-    if (built.n[i] != 0)
-      s += (s.empty() ? "" : ", ") + std::to_string(built.n[i]) + " " + to_string(static_cast<Representation>(i));
-  return s.empty() ? "none" : s;
 }
 
 // Where the run starts: the settling of its packing (this run's, or on --resume the run it
@@ -298,6 +290,7 @@ struct RunStart {
   bool loading_resumed = false;  // --resume from a checkpoint of the loading (not of the settling)
   long resumed_settle_step = -1;  // --resume from a checkpoint of the settling: its step
   Json run_info = Json::object();
+  Json relaxation;  // a file packing relaxed by this process (relaxation_report), else null
 };
 
 // The scenario's notes, and a warning when its threads oversubscribe the machine.
@@ -353,6 +346,18 @@ SettleControl settle_control(const RunRequest& req, Scenario& sc) {
   return ctl;
 }
 
+// One line on what relaxing a file packing did (relaxation_report).
+void print_relaxation(const Json& r, const std::string& engine) {
+  const std::string by = r["built_by"].get<std::string>();
+  std::cerr << "crumble: packing relaxed on '" << engine << "'" << (by.empty() ? "" : " (built by '" + by + "')")
+            << " in " << r["steps"].get<long>() << " steps: platen stress " << fmt_num(r["platen_stress_first_Pa"].get<double>() / 1e6)
+            << " MPa after the first step, at most " << fmt_num(r["platen_stress_max_Pa"].get<double>() / 1e6) << ", "
+            << fmt_num(r["platen_stress_final_Pa"].get<double>() / 1e6) << " MPa at the end; grains moved "
+            << fmt_num(r["grain_displacement_max_m"].get<double>() * 1e3) << " mm at most ("
+            << fmt_num(r["grain_displacement_mean_m"].get<double>() * 1e3) << " mm on average); void ratio "
+            << fmt_num(r["void_ratio_before"].get<double>()) << " -> " << fmt_num(r["void_ratio_after"].get<double>()) << "\n";
+}
+
 // The packing settled (from `from`, a checkpoint's progress, when given) and written. False
 // when a signal interrupted the settling.
 bool settle_and_write(const RunRequest& req, Scenario& sc, RunStart& st, const std::optional<SettleProgress>& from) {
@@ -380,7 +385,12 @@ bool settle_and_write(const RunRequest& req, Scenario& sc, RunStart& st, const s
               << settled.steps << " steps); the run starts from it anyway (summary.json: packing_settled false)\n";
   st.packing_settled = settled.converged;
   write_file_atomic(out + "/packing.json", packing_to_json(sim, sc.packing).dump(1) + "\n");
-  if (!req.quiet && st.settle_steps > 0) std::cerr << "crumble: packing settled in " << st.settle_steps << " steps\n";
+  if (sc.packing.type == "file" && sc.packing.settle) {
+    st.relaxation = relaxation_report(sim, sc.packing, settled);
+    if (!req.quiet) print_relaxation(st.relaxation, sc.engine_name);
+  } else if (!req.quiet && st.settle_steps > 0) {
+    std::cerr << "crumble: packing settled in " << st.settle_steps << " steps\n";
+  }
   return true;
 }
 
@@ -468,6 +478,18 @@ Json packing_stage_summary(const Scenario& sc, const RunStart& st, const std::st
   return j;
 }
 
+// A file packing's summary.json figures: packing_relaxed (0 when it was loaded as it was) and the
+// relax_* figures of relaxation_report.
+void add_relaxation(RunSummary& sum, const Scenario& sc, const Json& r) {
+  if (sc.packing.type != "file") return;
+  sum.extra["packing_relaxed"] = r.is_object() ? 1.0 : 0.0;
+  if (!r.is_object()) return;
+  for (const auto& [k, v] : r.items()) {
+    if (v.is_number()) sum.extra["relax_" + k] = v.get<double>();
+    if (v.is_boolean()) sum.extra["relax_" + k] = v.get<bool>() ? 1.0 : 0.0;
+  }
+}
+
 // The loading: observers attached, the simulation run with a progress line every few
 // seconds on a terminal; in a log (stderr not a terminal: a batch job, a test) one a
 // minute, so long runs still show where they are without flooding the log. --quiet: none.
@@ -498,17 +520,29 @@ RunSummary run_loading(const RunRequest& req, Scenario& sc, const RunStart& st) 
     if (st.run_info.contains("packing_settled") && st.run_info["packing_settled"].is_boolean())
       sum.extra["packing_settled"] = st.run_info["packing_settled"].get<bool>() ? 1.0 : 0.0;
   }
+  add_relaxation(sum, sc, st.run_info.value("relaxation", Json()));
   if (st.loading_resumed) sum.extra["resumed_from_step"] = static_cast<double>(st.resumed_step);
   if (st.resumed_settle_step >= 0) sum.extra["resumed_from_settle_step"] = static_cast<double>(st.resumed_settle_step);
   return sum;
 }
 
-// summary.json of a run: the summary's figures, the packing's hash, the changes on
-// --resume, the analyses per MPI rank and the representations built.
+// summary.json's notes: the scenario's (printed, or declared deliberate) and the run's.
+Json notes_of(const Scenario& sc) {
+  std::vector<Note> all = sc.setting_notes;
+  for (const auto& text : sc.notes)  // the others (a fidelity preset's values)
+    if (std::none_of(all.begin(), all.end(), [&](const Note& n) { return n.text == text; })) all.push_back({"", text, ""});
+  all.insert(all.end(), sc.sim->notes().begin(), sc.sim->notes().end());
+  return notes_json(all);
+}
+
+// summary.json of a run: the summary's figures, the packing's hash, the notes, the changes
+// on --resume, the analyses per MPI rank and the representations built.
 Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, const std::string& packing_hash,
                  const RepresentationCounts& built) {
   Json j = summary_json(sum, sc.name, sc.engine_name, sc.breakage_name, sc.fragments_name, sc.seed, sc.threads);
   j["packing_hash"] = packing_hash;
+  j["notes"] = notes_of(sc);
+  for (auto it = sc.presets.begin(); it != sc.presets.end(); ++it) j[it.key()] = it.value();
   if (!st.changed_on_resume.empty()) j["resume_changes"] = st.changed_on_resume;
   if (const AnalysisExecutor* ex = sc.sim->analysis_executor()) {
     j["analysis_ranks"] = ex->ranks();
@@ -524,14 +558,14 @@ Json run_summary(const RunSummary& sum, const Scenario& sc, const RunStart& st, 
   return j;
 }
 
-void report_done(const RunRequest& req, const Scenario& sc, const RunSummary& sum, const RepresentationCounts& built) {
+void report_done(const RunRequest& req, const Scenario& sc, const RunSummary& sum) {
   if (sum.interrupted)
     std::cerr << "crumble: interrupted at step " << sum.steps << "; outputs written"
               << (sc.output.checkpoint_every > 0 || sc.output.checkpoint_every_s > 0 ? ", resume with --resume\n" : "\n");
+  // The representations built are in summary.json (representations_built), not on stderr.
   if (!req.quiet)
-    std::cerr << "crumble: done in " << sum.wall_seconds << " s, " << sum.steps << " steps, " << sum.grains_final
-              << " grains, " << sum.breakage_events << " breakage events; results in " << req.out << "\n"
-              << "crumble: representations built: " << representations_line(built) << "\n";
+    std::cerr << "crumble: " << format_done(sum.wall_seconds, sum.steps, sum.grains_final, sum.breakage_events, req.out)
+              << "\n";
 }
 
 RunResult execute(const RunRequest& req) {
@@ -562,17 +596,21 @@ RunResult execute(const RunRequest& req) {
       std::cerr << "crumble: packing of " << sc.sim->grains().size() << " grains in " << out << "/packing.json\n";
     return res;
   }
-  if (!st.loading_resumed)
+  if (!st.loading_resumed) {
     st.run_info = {{"packing_settle_steps", st.settle_steps}, {"packing_settled", st.packing_settled}};
+    if (!st.relaxation.is_null()) st.run_info["relaxation"] = st.relaxation;
+  }
   RunSummary sum = run_loading(req, sc, st);
   sum.wall_seconds = seconds_since(t0);
   const RepresentationCounts built = representations_built() - built_before;
   const Json j = run_summary(sum, sc, st, packing_hash, built);
   write_file_atomic(out + "/summary.json", j.dump(2) + "\n");
   res.summary = j;
-  report_done(req, sc, sum, built);
+  report_done(req, sc, sum);
   // An interrupted run is not a finished one: 128 + the signal, as a shell reports it.
   if (req.plots && sc.output.plots) plots_after(out, req.quiet);
+  if (!req.quiet && !sum.interrupted)
+    if (const std::string open = what_to_open(out); !open.empty()) std::cerr << "crumble: " << open << "\n";
   if (sum.interrupted) {
     res.status = interrupted_status();
     res.reason = "interrupted at step " + std::to_string(sum.steps);
@@ -584,9 +622,21 @@ RunResult execute(const RunRequest& req) {
 
 Json request_document(const RunRequest& req) {
   Json doc = req.scenario;
-  for (const auto& o : req.sets) apply_override(doc, o);
-  if (req.packing_file && doc.is_object() && !doc.contains("scene"))
-    doc["packing"] = Json{{"type", "file"}, {"path", *req.packing_file}};
+  for (const auto& o : req.sets) apply_override_lapsing(doc, o);
+  if (req.packing_file && doc.is_object() && !doc.contains("scene")) {
+    // The scenario's settling stress and convergence test serve a relaxation (Packing.h); its
+    // friction scale does not: a packing relaxes with the friction it is loaded with.
+    Json file{{"type", "file"}, {"path", *req.packing_file}};
+    const Json* settle = doc.contains("packing") && doc["packing"].is_object() && doc["packing"].contains("settle")
+                             ? &doc["packing"]["settle"] : nullptr;
+    if (settle && settle->is_object()) {
+      Json s = *settle;
+      s.erase("enabled");
+      s.erase("friction_scale");
+      if (!s.empty()) file["settle"] = std::move(s);
+    }
+    doc["packing"] = std::move(file);
+  }
   return doc;
 }
 

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Config.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Sections.h"
 
 namespace crumble {
@@ -60,9 +61,9 @@ std::string selected(const Json& doc, const std::string& section, const std::str
 
 }  // namespace
 
-std::vector<std::string> apply_fidelity(Json& doc) {
-  std::vector<std::string> written;
-  if (!doc.is_object() || !doc.contains("fidelity")) return written;
+PresetReport apply_fidelity_report(Json& doc, const PresetReport& method) {
+  PresetReport r;
+  if (!doc.is_object() || !doc.contains("fidelity")) return r;
   const Json& f = doc["fidelity"];
   std::string known;
   for (const auto& p : fidelity_presets()) known += (known.empty() ? "" : ", ") + p;
@@ -74,6 +75,7 @@ std::vector<std::string> apply_fidelity(Json& doc) {
   if (!ok)
     throw ConfigError("/fidelity", "unknown preset '" + preset + "'; expected one of: " + known +
                                        " (docs/speed-accuracy.md), or leave 'fidelity' out");
+  r.name = preset;
   const int dim = doc.contains("dimension") && doc["dimension"].is_number() && doc["dimension"].get<double>() == 2 ? 2 : 3;
   const DefaultImplementations& def = default_implementations(dim);
   const std::string engine = selected(doc, "engine", def.engine);
@@ -83,35 +85,25 @@ std::vector<std::string> apply_fidelity(Json& doc) {
   for (const auto& k : fidelity_knobs()) {
     const std::string& active = k.seam == "engine" ? engine : k.seam == "breakage" ? breakage : fragments;
     if (active.empty() || active != k.implementation) continue;
-    // Walk the dotted path; stop at a non-object on the way (the factory reports it) and at a
-    // value already there (explicit values win).
-    Json* node = &doc;
-    std::size_t a = 0;
-    bool skip = false;
-    while (true) {
-      const std::size_t b = k.path.find('.', a);
-      const std::string key = k.path.substr(a, b == std::string::npos ? std::string::npos : b - a);
-      if (b == std::string::npos) {
-        if (node->contains(key)) skip = true;
-        else (*node)[key] = fidelity_value(k, preset);
-        break;
-      }
-      if (node->contains(key) && !(*node)[key].is_object()) {
-        skip = true;
-        break;
-      }
-      node = &(*node)[key];
-      a = b + 1;
+    ++r.governed;
+    // Explicit values (and the method's) win; a non-object on the way is the factory's to report.
+    if (fill_missing(doc, k.path, fidelity_value(k, preset))) {
+      r.set.push_back(k.path + "=" + fidelity_value(k, preset).dump());
+      continue;
     }
-    if (!skip) written.push_back(k.path + "=" + fidelity_value(k, preset).dump());
+    bool by_method = false;
+    for (const auto& s : method.set) by_method = by_method || s.rfind(k.path + "=", 0) == 0;
+    (by_method ? r.left_by_method : r.left).push_back(k.path);
   }
-  return written;
+  return r;
 }
+
+std::vector<std::string> apply_fidelity(Json& doc) { return apply_fidelity_report(doc, PresetReport{}).set; }
 
 std::string fidelity_text() {
   std::ostringstream o;
-  o << "fidelity presets (scenario key \"fidelity\": fast | balanced | accurate; a value the scenario or --set gives "
-       "wins; docs/speed-accuracy.md):\n";
+  o << "fidelity presets (scenario key \"fidelity\": fast | balanced | accurate; a value the scenario, --set or "
+       "the method gives wins; docs/speed-accuracy.md):\n";
   std::string last;
   for (const auto& k : fidelity_knobs()) {
     if (k.implementation != last) o << "  " << k.seam << " " << k.implementation << ":\n";

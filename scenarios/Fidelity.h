@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scenarios/Methods.h"
+
 namespace crumble {
 
 struct FidelityKnob {
@@ -34,6 +36,12 @@ const nlohmann::json& fidelity_value(const FidelityKnob& knob, const std::string
 // values win. Returns "path=value" for each value it wrote. Throws ConfigError at /fidelity when
 // the value is not a string or not a preset (the message lists the presets).
 std::vector<std::string> apply_fidelity(nlohmann::json& doc);
+
+// The same, reporting also the knobs of the selected implementations it left because a value
+// was there: `left` those the scenario or --set gave, `left_by_method` those `method` (what
+// apply_method did to the document just before) set. `governed` counts the knobs of the
+// selected implementations; set + left + left_by_method is all of them.
+PresetReport apply_fidelity_report(nlohmann::json& doc, const PresetReport& method);
 
 // The presets for a person (`crumble list`): each preset's knobs per implementation.
 std::string fidelity_text();

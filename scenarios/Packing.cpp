@@ -242,6 +242,8 @@ void explicit_packing(const Config& pc, const Config& cc, const PackingSettings&
   std::unique_ptr<Json> file_doc;
   std::unique_ptr<Config> file_cfg;
   if (spec.type == "file") {
+    if (pc.child("settle").has("enabled"))
+      pc.child("settle").fail("enabled", "a file packing is not settled again; packing.relax decides whether it relaxes");
     std::ifstream in(ps.path);
     if (!in) pc.fail("path", "cannot open packing file '" + ps.path + "'");
     std::stringstream ss;
@@ -257,6 +259,9 @@ void explicit_packing(const Config& pc, const Config& cc, const PackingSettings&
       fc.number("platen_mass", 0);
     }
     file_cfg->integer("dimension", dim, dim, dim);
+    spec.built_by = file_cfg->string("engine", "");
+    spec.relax = ps.relax;
+    read_options(pc.child("settle"), settle_options(), spec.settle_settings);
     // Unknown keys are checked once the grain entries are read (below).
   } else {
     entries = pc.children("grains");
@@ -348,6 +353,11 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   const long window = std::max(1L, std::lround(ss.window / p.dt));
   const long max_steps = std::max(window, std::lround(ss.max_time / p.dt));
   e.set_platen({PlatenCommand::Mode::Force, ss.stress * area});
+  // A relaxing file packing is damped for its first window: the other engine's overlaps give
+  // their energy up without bursting the packing (Engine::set_relaxation_damping), then the
+  // packing settles undamped as a cloud does.
+  bool damped = spec.type == "file" && p.steps < window;
+  if (damped) e.set_relaxation_damping(true);
   if (!e.set_friction_scale(ss.friction_scale))
     throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
                                                             "' cannot change friction while settling; use 1");
@@ -362,9 +372,16 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
     const double z0 = e.platen_position();
     e.step(p.dt);
     ++p.steps;
+    const double stress = area > 0 ? e.platen_force() / area : 0;
+    if (p.steps == 1) p.stress_first = stress;
+    p.stress_max = std::max(p.stress_max, stress);
     sim.account_step(e.platen_force(), e.platen_position() - z0);
     sim.check_guards("settling", p.dt, p.steps % guard_every == 0);
     if (p.steps % window == 0) {
+      if (damped) {
+        e.set_relaxation_damping(false);
+        damped = false;
+      }
       const double z = e.platen_position();
       const bool loaded = e.platen_force() > 0.5 * ss.stress * area;
       if (loaded && std::abs(p.last_platen - z) < ss.tolerance * p.mean_diameter) {
@@ -375,7 +392,10 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
     }
     if (ctl.after_step) ctl.after_step(p, false);
   }
+  if (damped) e.set_relaxation_damping(false);
   res.steps = p.steps;
+  res.stress_first = p.stress_first;
+  res.stress_max = p.stress_max;
   e.set_friction_scale(1.0);
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
@@ -389,9 +409,41 @@ SettleResult build_packing(Simulation& sim, const PackingSpec& spec, const std::
   return settle_packing(sim, spec, ctl);
 }
 
+void decide_relaxation(PackingSpec& spec, const std::string& engine) {
+  if (spec.type != "file") return;
+  spec.settle = spec.relax == "on" || (spec.relax == "auto" && !spec.built_by.empty() && spec.built_by != engine);
+}
+
+Json relaxation_report(const Simulation& sim, const PackingSpec& spec, const SettleResult& r) {
+  double solid = 0;
+  for (const auto& g : spec.grains) solid += g.shape->volume();
+  double moved_max = 0, moved_sum = 0;
+  for (const auto& g : sim.grains()) {
+    const auto i = static_cast<std::size_t>(g.id);
+    if (i >= spec.grains.size()) continue;
+    const double d = norm(g.position - spec.grains[i].position);
+    moved_max = std::max(moved_max, d);
+    moved_sum += d;
+  }
+  const RunState s = sim.state();
+  const Container& c = spec.container;
+  const double area = sim.context().dimension == 2 ? c.lx : c.lx * c.ly;
+  return Json{{"built_by", spec.built_by},
+              {"steps", r.steps},
+              {"converged", r.converged},
+              {"platen_stress_first_Pa", r.stress_first},
+              {"platen_stress_max_Pa", r.stress_max},
+              {"platen_stress_final_Pa", s.platen_stress},
+              {"grain_displacement_max_m", moved_max},
+              {"grain_displacement_mean_m", moved_sum / static_cast<double>(std::max<std::size_t>(1, sim.grains().size()))},
+              {"void_ratio_before", solid > 0 ? (area * c.height - solid) / solid : 0.0},
+              {"void_ratio_after", s.void_ratio}};
+}
+
 Json packing_to_json(const Simulation& sim, const PackingSpec& spec) {
   Json j;
   j["dimension"] = sim.context().dimension;
+  j["engine"] = sim.engine().name();
   j["container"] = {{"lx", spec.container.lx},
                     {"ly", spec.container.ly},
                     {"height", sim.engine().platen_position()},

@@ -47,7 +47,13 @@ struct PackingSpec {
   FeedSettings feed;
   double duration = 0;
   std::map<std::string, double> scene_figures;
+  // A file packing: the engine that built it (packing.json's "engine"; empty in files written
+  // before 0.2.0) and packing.relax. Relaxing is settling (settle_packing) on this scenario's
+  // engine; decide_relaxation sets `settle` once the engine is known.
+  std::string built_by;
+  std::string relax = "off";
 };
+
 
 // Reads the "packing" and "container" objects; for "cloud" draws the grains now.
 PackingSpec packing_from_config(const Config& packing, const Config& container, int dimension, Rng& rng);
@@ -62,7 +68,18 @@ struct SettleResult {
   long steps = 0;
   bool interrupted = false;  // `stop` was raised before the packing was stable
   bool converged = true;     // false: settle.max_time ran out before the platen came to rest
+  double stress_first = 0, stress_max = 0;  // Pa (SettleProgress)
 };
+
+// A file packing relaxes (spec.settle) when packing.relax is "on", or "auto" and packing.json
+// was built by another engine than `engine`. Nothing for other packing types.
+void decide_relaxation(PackingSpec& spec, const std::string& engine);
+
+// What relaxing a file packing did, after settle_packing returned `r` for it: the engine that
+// built the packing, steps, the platen stress after the first step, its largest value and at
+// the end (Pa), how far the grains moved from the file's positions (m, largest and mean), and
+// the void ratio of the file and after.
+nlohmann::json relaxation_report(const Simulation& sim, const PackingSpec& spec, const SettleResult& r);
 
 // What the run pipeline adds to a settling: a stop flag (a signal), where to go on from
 // (a checkpoint's progress; the grains are already in the simulation), and a call after

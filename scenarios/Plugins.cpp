@@ -24,7 +24,7 @@ void load_plugin(const std::string& path) {
     throw std::invalid_argument("--plugin " + path + ": built for plugin ABI " + std::to_string(v) +
                                 ", this crumble has ABI " + std::to_string(kPluginAbi) + "; rebuild the plugin");
   }
-  PluginRegistrar r{engines(), breakage_models(), fragment_builders()};
+  PluginRegistrar r{engines(), breakage_models(), fragment_builders(), methods()};
   reg(r);  // the library stays loaded for the life of the process
 }
 

@@ -11,6 +11,7 @@
 #include "base/Format.h"
 #include "scenarios/Fidelity.h"
 #include "scenarios/InputChecks.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Registry.h"
 #include "output/VtkWriter.h"
 #include "scenarios/Walls.h"
@@ -83,7 +84,7 @@ std::vector<TimeStepRule> time_steps_from(const Config& root) {
 // lsdem scenario builds no Bullet world).
 template <class T>
 void accept_sibling_options(const Config& section, const T& table, const std::string& active,
-                            std::vector<std::string>& notes) {
+                            std::vector<Note>& notes) {
   const std::set<std::string> used = section.read_keys();
   for (auto it = section.doc().begin(); it != section.doc().end(); ++it) {
     if (used.count(it.key())) continue;
@@ -110,7 +111,8 @@ void accept_sibling_options(const Config& section, const T& table, const std::st
       continue;  // declared by no implementation: check_unknown() reports it
     }
     section.accept(it.key());
-    notes.push_back(section.path() + "/" + it.key() + " is an option of " + owners + "', ignored by '" + active + "'");
+    const std::string path = section.path() + "/" + it.key();
+    notes.push_back({path, path + " is an option of " + owners + "', ignored by '" + active + "'", ""});
   }
 }
 
@@ -164,6 +166,7 @@ struct Implementations {
   std::unique_ptr<BreakageModel> model;
   std::unique_ptr<FragmentBuilder> builder;
   const RegistryEntry<EngineFactory>* engine_entry = nullptr;
+  std::vector<Note> notes;  // options of other implementations, accepted but not used
 };
 
 // An engine that cannot do what the packing asks (frictionless settling, moving walls) refuses
@@ -211,9 +214,9 @@ Implementations make_implementations(const Config& root, int dim, Scenario& sc, 
   im.engine = im.engine_entry->make(ec, ctx);
   check_engine_can(*im.engine, *im.engine_entry, root, ec, ctx, sc.packing);
   im.model = bentry.make(bc, ctx);
-  accept_sibling_options(ec, engines(), sc.engine_name, sc.notes);
-  accept_sibling_options(bc, breakage_models(), sc.breakage_name, sc.notes);
-  if (im.builder) accept_sibling_options(root.child("fragments"), fragment_builders(), sc.fragments_name, sc.notes);
+  accept_sibling_options(ec, engines(), sc.engine_name, im.notes);
+  accept_sibling_options(bc, breakage_models(), sc.breakage_name, im.notes);
+  if (im.builder) accept_sibling_options(root.child("fragments"), fragment_builders(), sc.fragments_name, im.notes);
   return im;
 }
 
@@ -277,21 +280,66 @@ EngineContext context_from(const Config& root, Json& doc, const BuildOptions& op
   return ctx;
 }
 
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// What the method set, as notes and as the summary's record.
+void report_method(const PresetReport& m, Scenario& sc) {
+  if (m.name.empty()) return;
+  for (const auto& w : m.set) sc.notes.push_back("method '" + m.name + "' sets " + w);
+  if (!m.left.empty())
+    sc.notes.push_back("method '" + m.name + "' leaves " + joined(m.left) + " as the scenario or --set gives them");
+  sc.presets["method"] = {{"name", m.name}, {"sets", m.set}, {"left_as_given", m.left}};
+}
+
+// What the fidelity preset set and left, and why it changed nothing when it did not.
+void report_fidelity(const PresetReport& f, const std::string& method, Scenario& sc) {
+  if (f.name.empty()) return;
+  const std::string who = "fidelity '" + f.name + "'";
+  for (const auto& w : f.set) sc.notes.push_back(who + " sets " + w);
+  std::string why;
+  if (!f.left.empty()) why = joined(f.left) + " given by the scenario or --set";
+  if (!f.left_by_method.empty())
+    why += (why.empty() ? "" : "; ") + joined(f.left_by_method) + " set by method '" + method + "'";
+  if (f.governed == 0)
+    sc.notes.push_back(who + " changes nothing: it has no knob for the engine, breakage model and fragment builder "
+                             "this scenario selects (crumble list)");
+  else if (f.set.empty())
+    sc.notes.push_back(who + " changes nothing: every key it governs here is already set (" + why + ")");
+  else if (!why.empty())
+    sc.notes.push_back(who + " leaves " + why);
+  Json j = {{"preset", f.name}, {"sets", f.set}, {"left_as_given", f.left}, {"left_as_method_set", f.left_by_method},
+            {"changes_nothing", f.set.empty()}};
+  if (f.set.empty()) j["note"] = sc.notes.back();
+  sc.presets["fidelity"] = j;
+}
+
+void apply_presets(Json& doc, Scenario& sc) {
+  const PresetReport m = apply_method(doc);
+  report_method(m, sc);
+  report_fidelity(apply_fidelity_report(doc, m), m.name, sc);
+}
+
 }  // namespace
 
 Scenario build_scenario(Json doc, const BuildOptions& opt) {
-  for (const auto& o : opt.overrides) apply_override(doc, o);
+  for (const auto& o : opt.overrides) apply_override_lapsing(doc, o);
   if (!doc.is_object()) throw ConfigError(opt.source_name, "a scenario must be a JSON object");
   Scenario sc;
-  // The preset fills in knobs before anything reads the document, so the file's own values and
-  // --set (already applied) win over it.
-  for (const auto& w : apply_fidelity(doc)) sc.notes.push_back("fidelity '" + doc["fidelity"].get<std::string>() + "' sets " + w);
+  // The method, then the preset, fill in values before anything reads the document, so the
+  // file's own values and --set (already applied) win over both, and the method's over the preset's.
+  apply_presets(doc, sc);
   Config root(doc);
+  if (root.has("method")) root.accept("method");
   if (root.has("fidelity")) root.accept("fidelity");
   const EngineContext ctx = context_from(root, doc, opt, sc);
   const int dim = ctx.dimension;
   read_packing(root, dim, sc, ctx);
   Implementations im = make_implementations(root, dim, sc, ctx);
+  decide_relaxation(sc.packing, sc.engine_name);
 
   SimulationSettings ss = simulation_from(root, sc.threads);
   if (!ss.auto_reduce_dt)
@@ -305,9 +353,17 @@ Scenario build_scenario(Json doc, const BuildOptions& opt) {
   sc.output = output_from(root);
   if (sc.output.series_every > 0) ss.sample_every = sc.output.series_every;
 
+  // A note about a setting the file declares deliberate goes to summary.json only (core/Notes.h).
+  const DeliberateSettings deliberate = read_deliberate(doc);
+  if (root.has("deliberate")) (void)root.raw("deliberate");  // read whole: its keys are JSON paths
+  for (const Note& n : im.notes) {
+    sc.setting_notes.push_back(make_note(deliberate, n.setting, n.text));
+    if (sc.setting_notes.back().deliberate.empty()) sc.notes.push_back(n.text);
+  }
   root.check_unknown();
   sc.sim = std::make_unique<Simulation>(std::move(im.engine), std::move(im.model), std::move(im.builder), ctx, ss, ls,
                                         sch, scr, sc.seed);
+  sc.sim->set_deliberate(deliberate);
   sc.effective = doc;
   return sc;
 }

@@ -21,7 +21,12 @@ struct Scenario {
   std::uint64_t seed = 1;
   int threads = 1;
   std::string engine_name, breakage_name, fragments_name;
-  std::vector<std::string> notes;  // options accepted but not used (see build_scenario)
+  std::vector<std::string> notes;  // printed: options accepted but not used, what a method or preset set (see build_scenario)
+  // The notes about one setting, printed or not (declared deliberate: core/Notes.h), for summary.json.
+  std::vector<Note> setting_notes;
+  // What the method ("method": name, sets, left_as_given) and the fidelity preset ("fidelity":
+  // preset, sets, left_as_given, left_as_method_set, changes_nothing[, note]) did; summary.json records it.
+  nlohmann::json presets = nlohmann::json::object();
 };
 
 struct BuildOptions {

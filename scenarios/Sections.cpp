@@ -130,6 +130,11 @@ const OptionTable& packing_options() {
         opt::string("path", &S::path, "file: the packing.json of an earlier run")
             .required_key()
             .when<S>([](const S& s) { return s.type == "file"; }),
+        opt::choice("relax", &S::relax, {"auto", "on", "off"},
+                    "file: before loading, let the packing come to rest on this scenario's engine under the platen "
+                    "at settle.stress (settle.* as for a cloud, but enabled); auto = when another engine built "
+                    "packing.json (its \"engine\")")
+            .when<S>([](const S& s) { return s.type == "file"; }),
     };
   }();
   return t;

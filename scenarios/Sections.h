@@ -53,6 +53,7 @@ struct PackingSettings {
   long material = 0;
   bool settle = false;  // type "grains"
   std::string path;     // type "file"
+  std::string relax = "auto";  // type "file": "auto" | "on" | "off" (Packing.h, relaxation)
   long dimension = 3;   // set by the caller
 };
 const OptionTable& packing_options();

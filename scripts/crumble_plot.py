@@ -360,7 +360,10 @@ def plot_run(F, d):
             settle = effective.get("packing", {}).get("settle", {}) if isinstance(effective, dict) else {}
             e0, s0 = summary.get("void_ratio_initial"), settle.get("stress") if isinstance(settle, dict) else None
             if isinstance(e0, (int, float)) and isinstance(s0, (int, float)) and s0 > 0 and s0 / 1e6 < pts[0][0]:
-                ax.plot([s0 / 1e6], [e0], "ks", ms=5, label=f"settled packing ({s0 / 1e3:g} kPa)")
+                # A packing that did not settle (packing_settled 0) is not labelled as settled.
+                what = (f"settled packing ({s0 / 1e3:g} kPa)" if summary.get("packing_settled", 1) else
+                        f"packing when settling stopped, not settled ({s0 / 1e3:g} kPa asked)")
+                ax.plot([s0 / 1e6], [e0], "ks", ms=5, label=what)
                 ax.legend(loc="lower left")
             plain_log_axis(ax)
             ax.set_xlabel("platen stress (MPa, log scale)")
@@ -431,7 +434,7 @@ def plot_run(F, d):
             F.save(fig, d, "fractal_dimension.png")
         break
 
-    plot_shape(F, d, name, dim, mode)
+    plot_shape(F, d, name, dim, mode, breaks)
 
     if scene == "single_grain" and len(series) >= 2 and "platen_force_N" in header and "platen_height_m" in header:
         h0 = series[0]["platen_height_m"]
@@ -484,7 +487,19 @@ def spread(values):
     return max(v) - min(v) if v else 0.0
 
 
-def plot_shape(F, d, name, dim, mode):
+def shapes_vary(first, last, means, invariant, mean_cols, breaks):
+    """Whether shape.png has something to show: breakage happened, or the grains differ in a
+    descriptor that depends neither on size nor on orientation (sphericity; in 2D circularity
+    and aspect ratio) or its mean moves. Identical grains at several sizes (spheres, disks)
+    give one value and a flat line: no figure (their Zingg EI and FI scatter only with the
+    facets of the mesh)."""
+    if breaks:
+        return True
+    return max([spread(first.get(n, []) + last.get(n, [])) for n in invariant] +
+               [spread([r[c] for r in means]) for c in mean_cols]) >= 1e-3
+
+
+def plot_shape(F, d, name, dim, mode, breaks):
     plt = F.plt
     shape_path = os.path.join(d, "shape.csv")
     means = []
@@ -497,11 +512,9 @@ def plot_shape(F, d, name, dim, mode):
         names = ("circularity", "aspect_ratio")
         first = vtk_grain_values(snaps[0], names) if snaps else {}
         last = vtk_grain_values(snaps[1], names) if snaps else {}
-        if not first and len(means) < 2:
+        if (not first and len(means) < 2) or not shapes_vary(first, last, means, names,
+                                                             ("mean_circularity", "mean_aspect_ratio"), breaks):
             return
-        if max([spread(first.get(n, []) + last.get(n, [])) for n in names] +
-               [spread([r[c] for r in means]) for c in ("mean_circularity", "mean_aspect_ratio")]) < 1e-3:
-            return  # one shape that never changes (disks): nothing to see
         fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.3))
         for ax, n, title, eq in zip(axes, names, ("circularity 4πA/P²", "aspect ratio (best-fit ellipse)"),
                                     ("Harmon et al. 2020, eq. 23", "short / long axis")):
@@ -529,11 +542,9 @@ def plot_shape(F, d, name, dim, mode):
         names = ("zingg_ei", "zingg_fi", "sphericity")
         first = vtk_grain_values(snaps[0], names) if snaps else {}
         last = vtk_grain_values(snaps[1], names) if snaps else {}
-        if not first and len(means) < 2:
+        if (not first and len(means) < 2) or not shapes_vary(first, last, means, ("sphericity",),
+                                                             ("mean_sphericity",), breaks):
             return
-        if max([spread(first.get(n, []) + last.get(n, [])) for n in names] +
-               [spread([r[c] for r in means]) for c in ("mean_sphericity", "mean_EI", "mean_FI")]) < 1e-3:
-            return  # one shape that never changes (spheres): nothing to see
         fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11.5, 5.0), gridspec_kw={"width_ratios": [1, 1.2]})
         # Zingg diagram: x = EI = I/L, y = FI = S/I; the classes split at 2/3.
         ax.axvline(2 / 3, color="k", lw=0.8)

@@ -28,6 +28,7 @@
 #include "output/Recorders.h"
 #include "run/RunPipeline.h"
 #include "tools/TableCells.h"
+#include "output/OutputReference.h"
 #include "output/Writers.h"
 
 namespace crumble {
@@ -246,15 +247,18 @@ std::string comparison_csv(const std::vector<VaryAxis>& axes, const std::vector<
                            const std::vector<std::string>& levels, const Optional& optional) {
   std::ostringstream c;
   c << std::setprecision(10);
-  for (const auto& a : axes) c << csv_field(a.path) << ',';
-  c << "folder,status,exit_status,reason,engine,breakage,fragments,grains_initial,grains_final,breakage_events,"
-       "void_ratio_initial";
-  for (const auto& k : levels) c << ',' << k;
-  c << ",void_ratio_final,max_platen_stress_Pa,psd_d50_final_m,fines_fraction_final,fines_size_m";
-  for (const auto& o : optional) c << ',' << o.first;
-  c << ",steps,wall_seconds";
-  for (const auto& p : kTimeParts) c << ",time_" << p << "_s";
-  c << ",packing_hash\n";
+  // The declared columns (output/OutputReference.cpp), each family expanded.
+  c << csv_header("comparison.csv", "", [&](const std::string& family) {
+    std::vector<std::string> names;
+    if (family == "<path>")
+      for (const auto& a : axes) names.push_back(csv_field(a.path));
+    if (family == "void_ratio_at_<level>") names = levels;
+    if (family == "<figure>")
+      for (const auto& o : optional) names.push_back(o.first);
+    if (family == "time_<part>_s")
+      for (const auto& p : kTimeParts) names.push_back("time_" + p + "_s");
+    return names;
+  }) << '\n';
   for (const auto& r : rows) {
     const Json& s = r.summary;
     for (const auto& [p, v] : r.combination.values) c << csv_field(v) << ',';
@@ -602,7 +606,9 @@ int build_shared_packing(const CompareRequest& req, const RunRequest& base, cons
   header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
                    (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
                    fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
-                   " s); every combination starts from packing.json, SHA-256 " + packing_hash + ".");
+                   " s); every combination starts from packing.json, SHA-256 " + packing_hash +
+                   ". A combination on another engine first relaxes it on its own engine under the settling stress "
+                   "(packing.relax auto; what it did is in its summary.json, relax_*).");
   return 0;
 }
 

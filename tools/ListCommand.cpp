@@ -1,9 +1,11 @@
 // `crumble list [--options NAME [--markdown]]`: the registered implementations of each seam,
-// the presets, and the option table an implementation declares.
+// the methods and presets, and the option table an implementation declares. `crumble list --outputs
+// [--markdown]`: every column and summary.json key a run writes (output/OutputReference.h, tools/OptionDocs.h).
 #include <iostream>
 
 #include "base/Errors.h"
 #include "scenarios/Fidelity.h"
+#include "scenarios/Methods.h"
 #include "scenarios/Registry.h"
 #include "tools/OptionDocs.h"
 #include "tools/Subcommand.h"
@@ -37,12 +39,20 @@ class ListCommand : public Subcommand {
     auto* c = app.add_subcommand("list", "registered engines, breakage models and criteria, fragment builders");
     c->add_option("--options", options_,
                   "print the options one implementation declares (key, type, default, range, meaning), e.g. lsdem");
-    c->add_flag("--markdown", markdown_, "with --options: as the Markdown table of docs/scenarios.md");
+    c->add_flag("--outputs", outputs_,
+                "print every CSV column and summary.json key a run, compare or sweep writes (unit, meaning)");
+    c->add_flag("--markdown", markdown_,
+                "with --options: as the Markdown table of docs/scenarios.md; with --outputs: as docs/output.md holds it");
     return c;
   }
 
   int run(const CommandContext&) override {
-    if (markdown_ && options_.empty()) throw InputError("list --markdown needs --options NAME");
+    if (outputs_ && !options_.empty()) throw InputError("list: give --outputs or --options NAME, not both");
+    if (outputs_) {
+      std::cout << (markdown_ ? output_reference_markdown() : output_reference_text());
+      return 0;
+    }
+    if (markdown_ && options_.empty()) throw InputError("list --markdown needs --options NAME or --outputs");
     return options_.empty() ? list_all() : list_options();
   }
 
@@ -53,8 +63,10 @@ class ListCommand : public Subcommand {
     list_table("fragment builders", fragment_builders());
     for (const auto& n : not_compiled())
       std::cout << "  (" << n.seam << " " << n.name << " not available: " << n.reason << ")\n";
+    std::cout << methods_text();
     std::cout << fidelity_text();
-    std::cout << "crumble list --options NAME: each option's type, default, range and meaning\n";
+    std::cout << "crumble list --options NAME: each option's type, default, range and meaning\n"
+                 "crumble list --outputs: every column and summary.json key a run writes\n";
     return 0;
   }
 
@@ -69,6 +81,7 @@ class ListCommand : public Subcommand {
 
   std::string options_;
   bool markdown_ = false;
+  bool outputs_ = false;
 };
 
 }  // namespace

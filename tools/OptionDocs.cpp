@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "output/OutputReference.h"
+
 namespace crumble {
 
 namespace {
@@ -27,6 +29,9 @@ std::string choices_markdown(const OptionSpec& s) {
 std::size_t columns(const std::string& s) {
   return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char c) { return (c & 0xC0) != 0x80; }));
 }
+
+// A unit as the reference shows it: "text" for a word, "–" for a number without unit.
+std::string unit_cell(const std::string& u) { return u.empty() ? "text" : u == "1" ? "–" : u; }
 
 std::string pad(const std::string& s, std::size_t width) {
   const std::size_t n = columns(s);
@@ -63,6 +68,40 @@ std::string option_table_text(const OptionTable& table) {
     if (dependent) out += "      default: " + s.default_doc + "\n";
     out += "      " + s.doc + "\n";
   }
+  return out;
+}
+
+std::string output_reference_markdown() {
+  std::string out;
+  for (const auto& f : output_csv_files()) {
+    std::string when = escape_pipes(f.when);
+    if (!when.empty() && when[0] >= 'a' && when[0] <= 'z') when[0] = static_cast<char>(when[0] - 'a' + 'A');
+    out += "### `" + f.file + "`\n\n" + when + ".\n\n| column | unit | meaning |\n|---|---|---|\n";
+    for (const auto& c : f.columns)
+      out += "| `" + escape_pipes(c.name) + "` | " + unit_cell(c.unit) + " | " + (c.only.empty() ? "" : "(" + c.only + ") ") +
+             escape_pipes(c.meaning) + " |\n";
+    out += "\n";
+  }
+  out += "### `summary.json`\n\nEvery run, at the end; nested keys by their path with dots.\n\n"
+         "| key | unit | meaning | written |\n|---|---|---|---|\n";
+  for (const auto& k : summary_keys())
+    out += "| `" + escape_pipes(k.name) + "` | " + unit_cell(k.unit) + " | " + escape_pipes(k.meaning) + " | " +
+           (k.when.empty() ? "always" : escape_pipes(k.when)) + " |\n";
+  return out;
+}
+
+std::string output_reference_text() {
+  std::string out;
+  for (const auto& f : output_csv_files()) {
+    out += f.file + ": " + f.when + "\n";
+    for (const auto& c : f.columns)
+      out += "  " + c.name + " [" + unit_cell(c.unit) + "]" + (c.only.empty() ? "" : " (" + c.only + ")") + "\n      " +
+             c.meaning + "\n";
+  }
+  out += "summary.json: every run, at the end\n";
+  for (const auto& k : summary_keys())
+    out += "  " + k.name + " [" + unit_cell(k.unit) + "]" + (k.when.empty() ? "" : " (" + k.when + ")") + "\n      " +
+           k.meaning + "\n";
   return out;
 }
 

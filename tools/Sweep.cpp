@@ -15,6 +15,7 @@
 #include "tools/Metrics.h"
 #include "run/RunPipeline.h"
 #include "tools/TableCells.h"
+#include "output/OutputReference.h"
 #include "output/Writers.h"
 
 namespace crumble {
@@ -207,12 +208,17 @@ std::string sweep_csv(const std::vector<VaryAxis>& axes, const CompareOutcome& r
   const auto& parts = time_breakdown_parts();
   std::ostringstream c;
   c << std::setprecision(10);
-  for (const auto& a : axes) c << csv_field(a.path) << ',';
-  c << "folder,status,exit_status,reason,reference,wall_seconds";
-  for (const auto& p : parts) c << ",time_" << p << "_s";
-  c << ",peak_rss_bytes";
-  for (const auto& m : t.chosen) c << ',' << column(m) << ',' << m.name << "_rel_error";
-  c << ",error,on_front\n";
+  // The declared columns (output/OutputReference.cpp), each family expanded.
+  c << csv_header("sweep.csv", "", [&](const std::string& family) {
+    std::vector<std::string> names;
+    if (family == "<path>")
+      for (const auto& a : axes) names.push_back(csv_field(a.path));
+    if (family == "time_<part>_s")
+      for (const auto& p : parts) names.push_back("time_" + p + "_s");
+    if (family == "<metric>")
+      for (const auto& m : t.chosen) names.insert(names.end(), {column(m), m.name + "_rel_error"});
+    return names;
+  }) << '\n';
   for (std::size_t i = 0; i < run.rows.size(); ++i) {
     const auto& r = run.rows[i];
     for (const auto& pv : r.combination.values) c << csv_field(pv.second) << ',';

@@ -334,6 +334,14 @@ double LsdemEngine::kinetic_energy() const {
   return e;
 }
 
+// Twice the highest contact frequency √(k/m_min) (max_stable_dt = dt_safety·√(m_min/k)): every
+// grain is overdamped, and c·Δt ≤ 2·dt_safety keeps the explicit update stable.
+bool LsdemEngine::set_relaxation_damping(bool on) {
+  const double dt = max_stable_dt();
+  relax_damping_ = on && std::isfinite(dt) ? 2 * s_.dt_safety / dt : 0;
+  return true;
+}
+
 double LsdemEngine::max_stable_dt() const {
   if (bodies_.empty()) return std::numeric_limits<double>::infinity();
   double mmin = std::numeric_limits<double>::infinity(), rmin = mmin, rmax = 0;
@@ -839,13 +847,14 @@ void LsdemEngine::apply_body_loads() {
   for (auto& b : bodies_) {
     b.f = ctx_.gravity * (b.m / s_.mass_scale);
     b.t = {};
-    if (s_.global_damping > 0) {
-      b.f -= b.v * (s_.global_damping * b.m);
+    const double c = s_.global_damping + relax_damping_;
+    if (c > 0) {
+      b.f -= b.v * (c * b.m);
       if (ctx_.dimension == 2) {
-        b.t.z -= s_.global_damping * b.Ib(2, 2) * b.w.z;
+        b.t.z -= c * b.Ib(2, 2) * b.w.z;
       } else {
         const Vec3 wb = b.R.transposed() * b.w;
-        b.t -= b.R * (b.Ib * wb) * s_.global_damping;
+        b.t -= b.R * (b.Ib * wb) * c;
       }
     }
   }
@@ -963,7 +972,7 @@ void LsdemEngine::integrate(double dt) {
       M /= s_.mass_scale;
     }
     M = platen_mass(container_, M, s_.mass_scale);
-    platen_.advance(dt, platen_force_, M, s_.global_damping);
+    platen_.advance(dt, platen_force_, M, s_.global_damping + relax_damping_);
   }
 }
 

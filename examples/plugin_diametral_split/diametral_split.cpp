@@ -106,4 +106,11 @@ extern "C" void crumble_plugin_register(crumble::PluginRegistrar& r) {
        },
        {},
        {2, 3}});
+  // A named method ("method": "diametral_split_lsdem"): the engine, model and builder it
+  // selects, each filled in only where the scenario leaves it out.
+  r.methods.add({"diametral_split_lsdem",
+                 "level-set DEM + diametral_split + level-set fragments (example plugin)",
+                 {{"engine.type", "lsdem", "example plugin"},
+                  {"breakage.type", "diametral_split", "example plugin"},
+                  {"fragments.type", "level_set", "example plugin"}}});
 }

@@ -14,8 +14,9 @@ from ._native import module as _module
 from ._run import Run, read_grains_vtp
 from ._run import open_run as open  # noqa: A001 (crumble.open, as the issue names it)
 from ._scenario import Scenario
+from ._version import __version__
 
 version = _module.version if _module is not None else None
 
 __all__ = ["Comparison", "Implementation", "InputError", "Option", "Registry", "Run", "RunFailed", "Scenario",
-           "binary", "compare", "open", "read_grains_vtp", "registry", "run", "sweep", "version"]
+           "binary", "compare", "open", "read_grains_vtp", "registry", "run", "sweep", "version", "__version__"]

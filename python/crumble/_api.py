@@ -46,7 +46,8 @@ class Implementation:
 class Registry:
     """What this build contains: ``engines``, ``models``, ``builders``, ``sections`` (the
     scenario's own sections: output, simulation, ...), ``criteria`` (model name -> its
-    criteria), ``presets`` (the fidelity presets: names and knobs), ``not_compiled``."""
+    criteria), ``presets`` (the fidelity presets: names and knobs), ``not_compiled``,
+    ``methods`` (the named methods: name, description and the settings each fills in)."""
     engines: tuple
     models: tuple
     builders: tuple
@@ -54,6 +55,7 @@ class Registry:
     criteria: dict
     presets: dict
     not_compiled: tuple = field(default=())
+    methods: tuple = field(default=())
 
     def find(self, name):
         """The implementations or sections called ``name``."""
@@ -72,7 +74,8 @@ def registry():
     j = json.loads(native().registry_json())
     seams = {k: tuple(_implementation(d) for d in j[k]) for k in ("engines", "models", "builders", "sections")}
     criteria = {m.name: m.variants for m in seams["models"] if m.variants}
-    return Registry(criteria=criteria, presets=j["presets"], not_compiled=tuple(j["not_compiled"]), **seams)
+    return Registry(criteria=criteria, presets=j["presets"], not_compiled=tuple(j["not_compiled"]),
+                    methods=tuple(j["methods"]), **seams)
 
 
 def _checked_int(name, v, lo, hi):

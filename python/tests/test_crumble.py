@@ -21,12 +21,23 @@ def cli(*args):
     return subprocess.run([crumble.binary(), *args], check=True, capture_output=True, text=True).stdout
 
 
+# ---- version
+
+
+def test_version_is_the_cmake_project_version():
+    project = re.search(r"project\(crumble VERSION ([0-9.]+)", (ROOT / "CMakeLists.txt").read_text()).group(1)
+    assert crumble.__version__ == project
+    assert subprocess.run([crumble.binary(), "--version"], capture_output=True, text=True).stdout.split()[1] == project
+    if crumble.version is not None:  # the compiled module's CRUMBLE_VERSION
+        assert crumble.version == project
+
+
 # ---- registry
 
 
 def test_registry_matches_crumble_list():
     text = cli("list")
-    blocks = re.split(r"^(engines|breakage models|fragment builders|fidelity presets.*):$", text, flags=re.M)
+    blocks = re.split(r"^(engines|breakage models|fragment builders|methods|fidelity presets)\b.*:$", text, flags=re.M)
     listed = {blocks[i]: re.findall(r"^  (\w+) — ", blocks[i + 1], flags=re.M) for i in range(1, len(blocks) - 1, 2)}
     reg = crumble.registry()
     assert [e.name for e in reg.engines] == listed["engines"]
@@ -34,6 +45,10 @@ def test_registry_matches_crumble_list():
     assert [b.name for b in reg.builders] == listed["fragment builders"]
     assert reg.criteria["stress"] == ("max_principal", "von_mises", "tresca")
     assert reg.presets["names"] == ["fast", "balanced", "accurate"]
+    assert [m["name"] for m in reg.methods] == listed["methods"] == ["zhu_zhao_2019", "harmon_2020"]
+    for m in reg.methods:
+        listed_settings = re.findall(r"^      (\S+) = (.+?)   \(", text.split("  " + m["name"] + " — ")[1], flags=re.M)
+        assert [p for p, _ in listed_settings[:len(m["settings"])]] == [s["path"] for s in m["settings"]], m["name"]
     for impl in reg.engines + reg.models + reg.builders:
         if impl.options:
             table = cli("list", "--options", impl.name)

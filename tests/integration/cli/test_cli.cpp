@@ -4,10 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <regex>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "crumble_config.h"
 #include "scenarios/Registry.h"
 #include "run/ThreadCheck.h"
 #include "tests/support/CliRunner.h"
@@ -223,7 +226,8 @@ TEST(Cli, CheckpointAndResumeContinueTheRun) {
   ASSERT_EQ(whole.status, 0) << whole.output;
   {
     // 300 sweeps of Bullet's solver do not reach its tolerance (2e-4) in this packing: the
-    // run says so, and summary.json counts it.
+    // run says so, and summary.json counts it. The file declares its 300 iterations
+    // deliberate; the --set of engine.solver_iterations lapses that, so the note prints.
     const auto s = nlohmann::json::parse(slurp(a / "summary.json"));
     EXPECT_EQ(s["engine_solver_iterations_max"], 300);
     EXPECT_GE(s["engine_solver_limited_fraction"].get<double>(), 0.1);  // the note's threshold
@@ -455,4 +459,142 @@ TEST(Cli, HelpDocumentsExitStatus) {
   EXPECT_EQ(h.status, 0);
   EXPECT_NE(h.output.find("143"), std::string::npos) << h.output;
   EXPECT_NE(h.output.find("--force"), std::string::npos) << h.output;
+}
+
+namespace {
+
+using Json = nlohmann::json;
+
+// The stderr lines of a run, each without its "crumble: " prefix.
+std::vector<std::string> stderr_lines(const std::string& output) {
+  std::vector<std::string> lines;
+  std::istringstream in(output);
+  for (std::string l; std::getline(in, l);) lines.push_back(l.rfind("crumble: ", 0) == 0 ? l.substr(9) : l);
+  return lines;
+}
+
+// The entry of summary.json's notes about `setting`, or null.
+Json note_about(const Json& summary, const std::string& setting) {
+  for (const auto& n : summary.at("notes"))
+    if (n.value("setting", "") == setting) return n;
+  return nullptr;
+}
+
+std::string project_version() {
+  const std::string cmake = slurp(fs::path(CRUMBLE_SOURCE_DIR) / "CMakeLists.txt");
+  std::smatch m;
+  if (!std::regex_search(cmake, m, std::regex(R"(project\(crumble VERSION ([0-9]+\.[0-9]+\.[0-9]+))"))) return "";
+  return m[1];
+}
+
+}  // namespace
+
+// The README's first command, made smaller (40 grains to 1 MPa; the engine as the file has it):
+// no note and no warning on stderr, only progress, where the results are and what to open
+// first. The file declares its 300 solver iterations and lsdem's kn deliberate; the notes
+// about them are in summary.json with the file's reasons.
+TEST(Cli, FirstRunPrintsOnlyWhatANewcomerCanActOn) {
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "first_run";
+  fs::remove_all(out);
+  const Result r = run("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_quick.json --out " +
+                       out.string() +
+                       " --set packing.count=40 --set container.lx=6e-3 --set container.ly=6e-3"
+                       " --set loading.max_stress=1e6 --set loading.ramp_time=0.02");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const std::string& l : stderr_lines(r.output)) {
+    bool known = false;
+    for (const char* start : {"building packing (", "packing settled in ", "[", "done in ", "plots", "open "})
+      known = known || l.rfind(start, 0) == 0;
+    EXPECT_TRUE(known) << "a line a newcomer cannot act on: '" << l << "' in\n" << r.output;
+  }
+  EXPECT_NE(r.output.find("results in " + out.string()), std::string::npos) << r.output;
+  const std::string main_figure = fs::exists(out / "ncl.png") ? (out / "ncl.png").string() + " first, then " : "";
+  EXPECT_NE(r.output.find("open " + main_figure + (out / "scene.pvd").string() + " in ParaView"), std::string::npos)
+      << r.output;
+  const Json s = Json::parse(slurp(out / "summary.json"));
+  ASSERT_GE(s["engine_solver_limited_fraction"].get<double>(), 0.1) << "the solver note's condition holds";
+  const Json solver = note_about(s, "/engine/solver_iterations");
+  ASSERT_TRUE(solver.is_object()) << s["notes"].dump();
+  EXPECT_NE(solver["note"].get<std::string>().find("iteration limit (300)"), std::string::npos) << solver.dump();
+  const Json file = Json::parse(slurp(fs::path(CRUMBLE_SOURCE_DIR) / "scenarios/oedometer_rigid_quick.json"));
+  ASSERT_TRUE(file.contains("deliberate"));
+  EXPECT_EQ(solver.value("deliberate", ""), file["deliberate"].value("/engine/solver_iterations", "?"));
+  for (const auto& n : s["notes"]) EXPECT_TRUE(n.contains("deliberate")) << "printed, yet: " << n.dump();
+}
+
+// An ignored option the file does not declare is still noted on stderr and in summary.json;
+// a declared one is only in summary.json, with its reason; a --set of the declared setting
+// lapses the declaration.
+TEST(Cli, OnlyDeclaredSettingsAreNotNoted) {
+  Json doc = Json::parse(kGood);
+  doc["engine"]["solver_iterations"] = 300;    // Bullet's and ODE's: ignored by lsdem
+  doc["engine"]["solver_tolerance"] = 1e-4;    // Bullet's: ignored by lsdem, not declared
+  doc["deliberate"] = {{"/engine/solver_iterations", "kept for --set engine.type=bullet"}};
+  const std::string f = scenario_file("deliberate.json", doc.dump());
+  const fs::path out = fs::temp_directory_path() / "crumble_cli_test" / "deliberate";
+  fs::remove_all(out);
+  const Result r = run("run " + f + " --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.find("/engine/solver_iterations is an option of"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("note: /engine/solver_tolerance is an option of 'bullet', ignored by 'lsdem'"),
+            std::string::npos)
+      << r.output;
+  const Json s = Json::parse(slurp(out / "summary.json"));
+  const Json declared = note_about(s, "/engine/solver_iterations");
+  ASSERT_TRUE(declared.is_object()) << s["notes"].dump();
+  EXPECT_EQ(declared.value("deliberate", ""), "kept for --set engine.type=bullet");
+  const Json undeclared = note_about(s, "/engine/solver_tolerance");
+  ASSERT_TRUE(undeclared.is_object()) << s["notes"].dump();
+  EXPECT_FALSE(undeclared.contains("deliberate")) << undeclared.dump();
+  // The file's reason was about its own value: a --set of it prints the note again.
+  fs::remove_all(out);
+  const Result set = run("run " + f + " --out " + out.string() + " --set engine.solver_iterations=500");
+  ASSERT_EQ(set.status, 0) << set.output;
+  EXPECT_NE(set.output.find("note: /engine/solver_iterations is an option of"), std::string::npos) << set.output;
+  const Json lapsed = note_about(Json::parse(slurp(out / "summary.json")), "/engine/solver_iterations");
+  ASSERT_TRUE(lapsed.is_object());
+  EXPECT_FALSE(lapsed.contains("deliberate")) << lapsed.dump();
+  EXPECT_FALSE(Json::parse(slurp(out / "effective_scenario.json")).contains("deliberate"));
+  // validate prints the undeclared note and not the declared one.
+  const Result v = run("validate " + f);
+  EXPECT_EQ(v.status, 0) << v.output;
+  EXPECT_EQ(v.output.find("/engine/solver_iterations is an option of"), std::string::npos) << v.output;
+  EXPECT_NE(v.output.find("/engine/solver_tolerance is an option of"), std::string::npos) << v.output;
+}
+
+// A declaration names a value the scenario sets and gives a reason; anything else is an error
+// at /deliberate, never a declaration that silently matches nothing.
+TEST(Cli, BadDeliberateDeclarationsAreErrors) {
+  const auto with = [](const Json& d) {
+    Json doc = Json::parse(kGood);
+    doc["deliberate"] = d;
+    return scenario_file("bad_deliberate.json", doc.dump());
+  };
+  expect_input_error("validate " + with({{"/engine/solver_iteration", "typo"}}),
+                     "/deliberate: '/engine/solver_iteration' is not the JSON path of a setting");
+  expect_input_error("validate " + with({{"engine.kn", "not a path"}}), "/deliberate: 'engine.kn' is not the JSON path");
+  expect_input_error("validate " + with({{"/engine/type", ""}}), "/deliberate: '/engine/type': expected the reason");
+  expect_input_error("validate " + with({{"/engine/type", 3}}), "/deliberate: '/engine/type': expected the reason");
+  expect_input_error("validate " + with(Json::array({"/engine/type"})), "/deliberate: expected an object");
+}
+
+// One version: CMake's project version is what --version prints, the SDK's CRUMBLE_VERSION
+// and CITATION.cff's version.
+TEST(Cli, VersionIsTheProjectVersionEverywhere) {
+  const std::string v = project_version();
+  ASSERT_FALSE(v.empty()) << "no project(crumble VERSION x.y.z) in CMakeLists.txt";
+  EXPECT_EQ(std::string(CRUMBLE_VERSION), v);
+  EXPECT_EQ(std::to_string(CRUMBLE_VERSION_MAJOR) + "." + std::to_string(CRUMBLE_VERSION_MINOR) + "." +
+                std::to_string(CRUMBLE_VERSION_PATCH),
+            v);
+  const Result r = run("--version");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.output.rfind("crumble " + v, 0), 0u) << r.output;
+  const std::string cff = slurp(fs::path(CRUMBLE_SOURCE_DIR) / "CITATION.cff");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(cff, m, std::regex(R"((^|\n)version: ([^\n]+))"))) << cff;
+  EXPECT_EQ(m[2].str(), v);
+  EXPECT_TRUE(std::regex_search(cff, std::regex(R"((^|\n)license: GPL-3\.0-or-later\n)"))) << cff;
+  EXPECT_NE(slurp(fs::path(CRUMBLE_SOURCE_DIR) / "LICENSE").find("GNU GENERAL PUBLIC LICENSE\n                       Version 3"),
+            std::string::npos);
 }

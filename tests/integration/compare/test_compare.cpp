@@ -84,18 +84,30 @@ TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
     if (engines.find(e) == std::string::npos) continue;
     for (const char* m : {"none", "stress"}) folders.push_back("engine.type=" + e + "__breakage.type=" + m);
   }
-  double e0 = -1;
+  double e0 = -1, e_relaxed_from = -1;
   for (const auto& f : folders) {
     SCOPED_TRACE(f);
     ASSERT_TRUE(fs::exists(out / f / "summary.json"));
     const Json s = Json::parse(slurp(out / f / "summary.json"));
-    // The identical packing: the same bytes, grains and (container height, solid volume) e0.
+    // The identical packing: the same bytes and grains.
     EXPECT_EQ(s.at("packing_hash").get<std::string>(), hash);
     EXPECT_EQ(s.at("grains_initial").get<int>(), 10);
-    if (e0 < 0) e0 = s.at("void_ratio_initial").get<double>();
-    EXPECT_NEAR(s.at("void_ratio_initial").get<double>(), e0, 1e-9 * e0);
-    // Loaded, not re-settled.
-    EXPECT_EQ(s.at("packing_settle_steps").get<double>(), 0.0);
+    if (f.find("engine.type=lsdem") != std::string::npos) {
+      // The packing's own engine (lsdem) loads it as it is: not settled again, not relaxed,
+      // the same (container height, solid volume) e0 in every such row.
+      if (e0 < 0) e0 = s.at("void_ratio_initial").get<double>();
+      EXPECT_NEAR(s.at("void_ratio_initial").get<double>(), e0, 1e-9 * e0);
+      EXPECT_EQ(s.at("packing_settle_steps").get<double>(), 0.0);
+      EXPECT_EQ(s.at("packing_relaxed").get<double>(), 0.0);
+    } else {
+      // Another engine relaxes it first (packing.relax auto), from the file's void ratio.
+      EXPECT_EQ(s.at("packing_relaxed").get<double>(), 1.0);
+      EXPECT_GT(s.at("packing_settle_steps").get<double>(), 0.0);
+      EXPECT_EQ(s.at("relax_steps").get<double>(), s.at("packing_settle_steps").get<double>());
+      EXPECT_NEAR(s.at("relax_void_ratio_after").get<double>(), s.at("void_ratio_initial").get<double>(), 1e-9);
+      EXPECT_GE(s.at("relax_platen_stress_max_Pa").get<double>(), s.at("relax_platen_stress_first_Pa").get<double>());
+      e_relaxed_from = s.at("relax_void_ratio_before").get<double>();
+    }
     const Json eff = Json::parse(slurp(out / f / "effective_scenario.json"));
     EXPECT_EQ(eff["packing"]["type"], "file");
     // Fragment building has its own entry in where the time went.
@@ -111,6 +123,7 @@ TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
     EXPECT_NEAR(s.at("mass_final_kg").get<double>() + s.at("mass_removed_kg").get<double>(),
                 s.at("mass_initial_kg").get<double>(), 1e-12 * s.at("mass_initial_kg").get<double>());
   }
+  if (e_relaxed_from >= 0) EXPECT_NEAR(e_relaxed_from, e0, 1e-9 * e0);  // relaxed from the shared file
   // The packing stage ran once and its packing.json is the one shared.
   EXPECT_EQ(crumble::file_sha256((out / "packing" / "packing.json").string()), hash);
 
@@ -245,4 +258,65 @@ TEST(Compare, Sha256KnownVectors) {
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");  // two blocks (sha256sum)
   EXPECT_EQ(crumble::sha256_hex(std::string(1000000, 'a')),
             "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+// A packing Bullet settled, loaded by lsdem: lsdem meets Bullet's overlaps as stored energy.
+// Loaded as it is (packing.relax off) the platen's first sample reads megapascals while the
+// ramp commands kilopascals; relaxed (auto: packing.json says Bullet built it) the grains
+// give that energy up first and the loading starts at the settling stress.
+TEST(Compare, APackingFromAnotherEngineRelaxesBeforeLoading) {
+#if CRUMBLE_WITH_BULLET
+  const fs::path dir = test_dir();
+  const std::string scen = (dir / "small.json").string();
+  std::ofstream(scen) << R"({
+    "name": "relax_small", "dimension": 3, "seed": 1,
+    "materials": [{"density": 2650, "young": 1e11, "poisson": 0.15, "friction": 0.5, "restitution": 0}],
+    "engine": {"type": "bullet", "mass_scale": 70, "solver_iterations": 1000, "kn": 5e6},
+    "breakage": {"type": "none"},
+    "container": {"lx": 0.0055, "ly": 0.0055},
+    "packing": {"type": "cloud", "count": 20, "psd": [[0.0014, 0], [0.002, 1]], "shape": {"type": "sphere"},
+                "settle": {"stress": 1e4}},
+    "loading": {"mode": "stress_ramp", "max_stress": 1e5, "ramp_time": 0.0005},
+    "time_step": 8e-5,
+    "output": {"vtk_final": false, "plots": false, "series_every": 1}
+  })";
+  const fs::path bullet = dir / "bullet";
+  ASSERT_EQ(run_cli("run " + scen + " --out " + bullet.string() + " --threads 1 --quiet").status, 0);
+  EXPECT_EQ(Json::parse(slurp(bullet / "packing.json")).at("engine"), "bullet");
+  const std::string lsdem = " --set engine.type=lsdem --set loading.ramp_time=0.01 --set loading.max_stress=2e6 --threads 1 --quiet"
+                            " --set packing='{\"type\": \"file\", \"path\": \"" + (bullet / "packing.json").string() + "\"}'";
+  auto first_stress = [](const fs::path& out) {
+    const auto rows = crumble::read_csv((out / "series.csv").string());
+    std::size_t c = 0;
+    while (c < rows[0].size() && rows[0][c] != "platen_stress_Pa") ++c;
+    return std::stod(rows.at(1).at(c));
+  };
+  const fs::path off = dir / "off", relaxed = dir / "relaxed";
+  ASSERT_EQ(run_cli("run " + scen + " --out " + off.string() + lsdem + " --set packing.relax=off").status, 0);
+  const auto r = run_cli("run " + scen + " --out " + relaxed.string() + lsdem);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Json s_off = Json::parse(slurp(off / "summary.json")), s = Json::parse(slurp(relaxed / "summary.json"));
+  EXPECT_EQ(s_off.at("packing_relaxed").get<double>(), 0.0);
+  EXPECT_EQ(s.at("packing_relaxed").get<double>(), 1.0);
+  EXPECT_EQ(s.at("relax_converged").get<double>(), 1.0);
+  // The transient: Bullet's overlaps push at > 1 MPa on lsdem; relaxed, the settling stress
+  // (10 kPa) within 50 %, and the relaxation saw and reported the push it removed.
+  EXPECT_GT(first_stress(off), 1e6);
+  EXPECT_NEAR(first_stress(relaxed), 1e4, 5e3);
+  EXPECT_GT(s.at("relax_platen_stress_max_Pa").get<double>(), 1e6);
+  EXPECT_NEAR(s.at("relax_platen_stress_final_Pa").get<double>(), 1e4, 5e3);
+  EXPECT_GT(s.at("relax_grain_displacement_max_m").get<double>(), 0.0);
+  // A file packing that names no other engine, or the loading engine, is loaded as it is.
+  EXPECT_EQ(s_off.at("packing_settle_steps").get<double>(), 0.0);
+#else
+  GTEST_SKIP() << "needs Bullet";
+#endif
+}
+
+TEST(Compare, AFilePackingIsNotSettledAgain) {
+  const fs::path dir = test_dir();
+  const auto r = run_cli("validate " + scenario(dir) +
+                         " --set packing='{\"type\": \"file\", \"path\": \"x.json\", \"settle\": {\"enabled\": true}}'");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("/packing/settle/enabled"), std::string::npos) << r.output;
 }

@@ -17,9 +17,11 @@
 #include "scenarios/Registry.h"
 #include "scenarios/ScenarioFactory.h"
 #include "tests/support/CliRunner.h"
+#include "tests/support/DocBlocks.h"
 
 namespace fs = std::filesystem;
 using crumble::testing_support::run_cli;
+using crumble::testing_support::first_difference;
 using crumble::testing_support::slurp;
 
 namespace {
@@ -27,18 +29,6 @@ namespace {
 const std::string kDocs = std::string(CRUMBLE_SOURCE_DIR) + "/docs/scenarios.md";
 const std::string kRefresh =
     "refresh the generated tables with scripts/update-option-docs.sh (after building build/crumble)";
-
-// The first line where `want` and `got` differ, both shown.
-std::string first_difference(const std::string& want, const std::string& got) {
-  std::istringstream a(want), b(got);
-  std::string la, lb;
-  for (int n = 1;; ++n) {
-    const bool ha = static_cast<bool>(std::getline(a, la)), hb = static_cast<bool>(std::getline(b, lb));
-    if (!ha && !hb) return "(no difference)";
-    if (!ha || !hb || la != lb)
-      return "table line " + std::to_string(n) + ":\n  code: " + (ha ? la : "(end)") + "\n  docs: " + (hb ? lb : "(end)");
-  }
-}
 
 bool compiled_out(const std::string& name) {
   return !crumble::not_compiled_reason("engine", name).empty() ||

@@ -142,6 +142,10 @@ TEST(Plots, ARunEndsWithItsFiguresUnlessOutputPlotsIsFalse) {
   expect_png(d / "ncl.png");
   expect_png(d / "psd.png");
   EXPECT_NE(r.output.find("crumble: plots: ncl.png, psd.png"), std::string::npos) << r.output;
+  // 25 identical rigid spheres: one sphericity, no breakage; a shape figure would show one dot
+  // and flat lines, so none is drawn.
+  EXPECT_FALSE(fs::exists(d / "shape.png"));
+  EXPECT_NE(r.output.find("crumble: plots: ncl.png, psd.png in"), std::string::npos) << r.output;
   // --force removes the earlier figures with the earlier run's files.
   const auto off = run_cli("run " + scen + " --force --out " + d.string() + kTinyRun + " --set output.plots=false");
   ASSERT_EQ(off.status, 0) << off.output;

@@ -1,5 +1,6 @@
 // A minimal out-of-tree breakage model, registered through the plugin entry points, with
-// one declared option (read through its table like the built-in implementations).
+// one declared option (read through its table like the built-in implementations), and a
+// named method that selects it.
 #include "breakage/none/NoBreakage.h"
 #include "scenarios/Plugins.h"
 
@@ -33,4 +34,7 @@ extern "C" void crumble_plugin_register(crumble::PluginRegistrar& r) {
                          {},
                          {2, 3},
                          plugin_never_options()});
+  r.methods.add({"plugin_method",
+                 "a method from a plugin",
+                 {{"breakage.type", "plugin_never", "the test plugin"}, {"breakage.patience", 7, "the test plugin"}}});
 }

@@ -12,11 +12,31 @@ file(REMOVE_RECURSE ${WORK})
 set(prefix ${WORK}/prefix)
 step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 foreach(f bin/crumble include/crumble/core/BreakageModel.h include/crumble/scenarios/Plugins.h
+          include/crumble/scenarios/Methods.h
           include/crumble/crumble_config.h lib/cmake/crumble/crumbleConfig.cmake)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "cmake --install did not install ${f}")
   endif()
 endforeach()
+if(NOT EXISTS ${prefix}/share/doc/crumble/LICENSE)
+  message(FATAL_ERROR "cmake --install did not install the licence (share/doc/crumble/LICENSE)")
+endif()
+
+# One version: the installed binary's --version, the SDK's CRUMBLE_VERSION and its CMake
+# package version (all from CMake's project version).
+step("crumble --version" ${prefix}/bin/crumble --version)
+string(REGEX MATCH "^crumble ([0-9]+\\.[0-9]+\\.[0-9]+)" _ "${step_output}")
+set(printed "${CMAKE_MATCH_1}")
+file(STRINGS ${prefix}/include/crumble/crumble_config.h _macro REGEX "#define CRUMBLE_VERSION \"")
+string(REGEX MATCH "\"([0-9.]+)\"" _ "${_macro}")
+set(sdk "${CMAKE_MATCH_1}")
+file(STRINGS ${prefix}/lib/cmake/crumble/crumbleConfigVersion.cmake _pkg REGEX "set\\(PACKAGE_VERSION \"")
+string(REGEX MATCH "\"([0-9.]+)\"" _ "${_pkg}")
+set(package "${CMAKE_MATCH_1}")
+if(printed STREQUAL "" OR NOT printed STREQUAL sdk OR NOT printed STREQUAL package)
+  message(FATAL_ERROR "versions differ: --version '${printed}', CRUMBLE_VERSION '${sdk}', package '${package}'")
+endif()
+
 if(EXISTS ${prefix}/include/crumble/geometry/cgal/CgalMesh.h)
   message(FATAL_ERROR "the SDK must not ship headers that need CGAL")
 endif()
@@ -34,6 +54,9 @@ set(plugin ${WORK}/build/diametral_split.so)
 step("crumble --plugin ... list" ${prefix}/bin/crumble --plugin ${plugin} list)
 if(NOT step_output MATCHES "diametral_split")
   message(FATAL_ERROR "the plugin's model is not listed:\n${step_output}")
+endif()
+if(NOT step_output MATCHES "diametral_split_lsdem — ")
+  message(FATAL_ERROR "the plugin's method is not listed:\n${step_output}")
 endif()
 
 # A 2 mm grain between platens: with a Weibull modulus of 1000 at d_c = d the strength is

@@ -67,11 +67,17 @@ TEST(Fidelity, ExplicitValuesAndSetOverridesWin) {
   // leaves them.
   EXPECT_EQ(sc.effective["engine"]["solver_iterations"].get<int>(), 1000);
   EXPECT_EQ(sc.effective["schedule"]["every_stress"].get<double>(), 0.1e6);
-  // What the preset did is said: a note per value it wrote, none for the ones it left.
+  // What the preset did is said: a note per value it wrote, none here (every knob was given),
+  // and one note naming the knobs it left and why.
+  std::string leaves;
   for (const auto& n : sc.notes) {
-    EXPECT_EQ(n.find("spacing_fraction"), std::string::npos) << n;
-    EXPECT_EQ(n.find("density_scale"), std::string::npos) << n;
+    EXPECT_EQ(n.rfind("fidelity 'fast' sets ", 0), std::string::npos) << n;
+    if (n.rfind("fidelity 'fast' changes nothing: ", 0) == 0) leaves = n;
   }
+  for (const char* k : {"breakage.spacing_fraction", "breakage.density_scale", "engine.solver_iterations",
+                        "schedule.every_stress", "given by the scenario or --set"})
+    EXPECT_NE(leaves.find(k), std::string::npos) << k << " not in '" << leaves << "'";
+  EXPECT_EQ(sc.presets.at("fidelity").at("changes_nothing"), true);
   // --set fidelity=... chooses the preset too; the preset fills what nothing else gives.
   Json plain = single_grain();
   plain["engine"].erase("solver_iterations");
@@ -160,13 +166,17 @@ TEST(Fidelity, OdeIterationsAreWrittenOnlyWhereTheScenarioLeavesThemOut) {
     for (const auto& n : sc.notes)
       notes += n.find("engine.solver_iterations=" + fidelity_value(*ode, preset).dump()) != std::string::npos;
     EXPECT_EQ(notes, 1u);
-    // The scenario's own value (300 in oedometer_rigid_quick) wins, with no note.
+    // The scenario's own value (300 in oedometer_rigid_quick) wins; the one note says the preset
+    // changed nothing, and why.
     Json fixed = rigid;
     fixed["engine"]["type"] = "ode";
     fixed["fidelity"] = preset;
     const Scenario kept = build_scenario(fixed, BuildOptions{});
     EXPECT_EQ(kept.effective["engine"]["solver_iterations"].get<int>(), 300);
-    for (const auto& n : kept.notes) EXPECT_EQ(n.find("solver_iterations"), std::string::npos) << n;
+    for (const auto& n : kept.notes)
+      if (n.find("solver_iterations") != std::string::npos)
+        EXPECT_EQ(n, "fidelity '" + preset + "' changes nothing: every key it governs here is already set "
+                                             "(engine.solver_iterations given by the scenario or --set)");
     // A --set wins too, also when it is what selects ODE.
     BuildOptions set;
     set.overrides = {"engine.type=ode", "engine.solver_iterations=77"};
