@@ -30,6 +30,7 @@ value; `crumble list` and `crumble validate` are run as given. Comments (` #` to
 a code line) are not commands.
 Exit 1 with one line per fault (FILE:LINE: what), 0 when there is none.
 """
+import json
 import os
 import re
 import shlex
@@ -156,6 +157,22 @@ def option_values(tokens, name):
     return [tokens[i + 1] for i, t in enumerate(tokens[:-1]) if t == name]
 
 
+def study_runs(root, study, where, faults):
+    """A study file (crumble sweep --study): its scenario (a file relative to the study's folder;
+    an inline scenario is not checked), its `set` and one --set per swept value."""
+    path = os.path.join(root, study)
+    if not os.path.exists(path):
+        faults.append(f"{where}: no study {study}")
+        return None, [], []
+    doc = json.load(open(path))
+    if not isinstance(doc.get("scenario"), str):
+        return None, [], []
+    scenario = os.path.relpath(os.path.normpath(os.path.join(os.path.dirname(path), doc["scenario"])), root)
+    runs = [[f"{p['path']}={json.dumps(v) if not isinstance(v, str) else v}"] for p in doc.get("params", [])
+            for v in p.get("values", [])]
+    return scenario, list(doc.get("set", [])), runs
+
+
 def check_concrete(binary, root, sub, tokens, where, faults):
     if sub in ("list", "validate"):
         r = subprocess.run([binary] + tokens, capture_output=True, text=True, cwd=root)
@@ -164,11 +181,24 @@ def check_concrete(binary, root, sub, tokens, where, faults):
         return
     if sub not in ("run", "compare", "sweep"):
         return
-    scenario = next((t for t in tokens[1:] if t.endswith(".json") and not t.startswith("-")), None)
+    study = option_values(tokens, "--study")
+    scenario = next((t for t in tokens[1:] if t.endswith(".json") and not t.startswith("-") and t not in study), None)
+    if study:
+        scenario, sets, runs = study_runs(root, study[0], where, faults)
+        if scenario is None:
+            return
     if scenario is None:
         return
     if not os.path.exists(os.path.join(root, scenario)):
         faults.append(f"{where}: no scenario {scenario}")
+        return
+    if study:
+        sets += option_values(tokens, "--set")
+        runs = [sets] + [sets + r for r in runs]
+        for r in runs:
+            err = validate(binary, root, scenario, r)
+            if err:
+                faults.append(f"{where}: `crumble validate {scenario}` with {r or 'no --set'}: {err}")
         return
     sets = option_values(tokens, "--set")
     runs = [sets]
