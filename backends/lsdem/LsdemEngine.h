@@ -32,6 +32,19 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
+// Selective mass scaling (off by default; selective_scaling_dt or selective_scaling_fraction):
+// a grain whose own stable step dt_safety·√(m/k_max) is below a target step gets its mass
+// and its inertia tensor multiplied by s = (target / own step)² (so its own step equals the
+// target, and its radius of gyration is kept); grains at or above the target are untouched.
+// The target is selective_scaling_dt (s), or selective_scaling_fraction × the stable step of
+// the packing the engine first steps (the initial packing: with a fraction ≤ 1 none of its
+// grains is scaled; the fragments born later are). The factor is fixed when the grain is
+// added. Weight uses the true mass (gravity never sees the added mass), and so do the
+// Simulation's mass budget and the platen's mass rule. The added mass (s − 1)·m per grain is
+// reported (summary_figures: added mass in kg and as a fraction of the grains' true mass, the
+// largest factor, the grains scaled), and its kinetic energy (added_kinetic_energy) is added
+// to the grains' kinetic energy that the energy guard bounds (core/Guards.h).
+//
 // Contact search: bounding spheres hashed into a uniform grid of cells build a Verlet list
 // of the pairs within a skin (pair_list_skin, 0.2 × the largest bounding radius), rebuilt only when two
 // grains may together have moved farther than the skin (broad phase); per
@@ -71,6 +84,8 @@ struct LsdemSettings {
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
   double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged
+  double selective_scaling_dt = 0;        // s: target step of selective mass scaling; 0 = off
+  double selective_scaling_fraction = 0;  // target = this × the initial packing's stable step; 0 = off
   double pair_list_skin = 0.2;          // Verlet skin / largest bounding radius (0: list rebuilt every step)
   int threads = 1;
 };
@@ -172,6 +187,12 @@ class LsdemEngine final : public Engine {
   double kinetic_energy() const;
   // The normal springs' energy at the last force evaluation (Engine::elastic_energy).
   double elastic_energy() const override { return elastic_energy_; }
+  // Selective mass scaling: the target step (s; 0 = off or not yet known), the figures for
+  // summary.json, and the kinetic energy (J; 2D: J/m) of the added mass at the grains'
+  // true masses: Σ ½(s − 1)·(m·v² + ω·I·ω).
+  double selective_target_dt() const { return target_dt_; }
+  std::map<std::string, double> summary_figures() const override;
+  double added_kinetic_energy() const override;
 
   struct ShapeData;
   struct Body;
@@ -215,6 +236,16 @@ class LsdemEngine final : public Engine {
   void reduce_forces(const std::vector<WallPlane>& walls, std::size_t npairs);
   bool apply_contact(const Item& item, const std::vector<WallPlane>& walls);
   void integrate(double dt);
+  // Selective mass scaling: the largest normal stiffness the stable step uses; the step of
+  // the current grains at their unscaled masses; the mass and inertia of b for the target
+  // (factor 1 below it, or when off); the target fixed at the first step (fraction mode).
+  double stiffness_bound() const;
+  double unscaled_stable_dt() const;
+  void apply_selective_scaling(Body& b) const;
+  void set_selective_factor(Body& b, double sel) const;
+  // restore_state's reader of the target step and the factors (by grain id).
+  std::pair<double, std::map<GrainId, double>> read_selective(StateReader& reader, const nlohmann::json& state) const;
+  void fix_selective_target();
   std::vector<Wall> walls() const;
   int up() const { return ctx_.dimension == 3 ? 2 : 1; }
 
@@ -260,6 +291,7 @@ class LsdemEngine final : public Engine {
   double elastic_energy_ = 0;  // J (2D: J/m), summed over the last step's contacts
   std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
+  double target_dt_ = 0;       // s: selective mass scaling's target step (0: off or not yet fixed)
   LsdemStats stats_;
 };
 

@@ -161,8 +161,10 @@ void expect_same_files_but_wall_times(const fs::path& whole, const fs::path& kil
 // writes every file as the uninterrupted run does, byte for byte, but for wall times. The
 // final checkpoint.json (grains with their Weibull strengths, lineage, poses, and the engine
 // state) is compared too, so the stress model's per-grain state is restored as it was.
-TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
-  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / "bit_identical";
+// (The body is shared with LsdemSelectiveScalingResumedAfterSigkillIsBitIdentical: `extra`
+// adds settings, `name` the folder; the uninterrupted run's summary is returned in `whole_summary`.)
+static void lsdem_kill_and_resume(const std::string& name, const std::string& extra, nlohmann::json& whole_summary) {
+  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / name;
   const fs::path whole = base / "whole", killed = base / "killed";
   fs::remove_all(base);
   fs::create_directories(base);
@@ -175,10 +177,11 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   const std::string sets =
       " --quiet --threads 1 --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
       " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0"
-      " --set screening.skip_intact_tolerance=0.1";
+      " --set screening.skip_intact_tolerance=0.1" + extra;
   const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
   ASSERT_EQ(a.status, 0) << a.output;
   const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
+  whole_summary = sa;
   const long steps = sa["steps"].get<long>();
   ASSERT_GT(sa["breakage_events"].get<long>(), 0);
   ASSERT_GT(sa["analyses_skipped"].get<long>(), 0);
@@ -259,6 +262,25 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     remembered += g.contains("intact_load");
   }
   EXPECT_GT(remembered, 0);
+}
+
+TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
+  nlohmann::json sa;
+  lsdem_kill_and_resume("bit_identical", "", sa);
+}
+
+// Selective mass scaling (engine.selective_scaling_fraction 1: every fragment below the
+// initial packing's stable step is scaled up to it): the target and the factors are in the
+// checkpoint's engine state, and the killed and resumed run is the uninterrupted one byte
+// for byte, its added mass (summary.json) included.
+TEST(Resume, LsdemSelectiveScalingResumedAfterSigkillIsBitIdentical) {
+  nlohmann::json sa;
+  lsdem_kill_and_resume("selective_scaling", " --set engine.selective_scaling_fraction=1", sa);
+  if (HasFatalFailure()) return;
+  ASSERT_TRUE(sa.contains("engine_selective_scaling_grains_scaled")) << sa.dump(1);
+  EXPECT_GT(sa["engine_selective_scaling_grains_scaled"].get<double>(), 0);
+  EXPECT_GT(sa["engine_selective_scaling_added_mass_kg"].get<double>(), 0);
+  EXPECT_GT(sa["engine_selective_scaling_max_factor"].get<double>(), 1);
 }
 
 // Bullet keeps state a checkpoint does not hold (persistent manifolds, solver warm starts, the

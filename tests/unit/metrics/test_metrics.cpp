@@ -172,3 +172,26 @@ TEST(Pareto, FrontByHand) {
   EXPECT_EQ(crumble::pareto_front({0.5, 1}, {nan, 0.3}), (std::vector<bool>{false, true}));
   EXPECT_TRUE(crumble::pareto_front({}, {}).empty());
 }
+
+// breakage_events_at_stress_<Pa>: the breakage rows (children or removed fines; intact
+// analyses do not count) before the first row at or above the level, for a level the run
+// reached (its void ratio is in summary.json); nothing for a level it did not reach.
+TEST(Metrics, BreakageEventsBeforeAReportedLevel) {
+  RunOutputs r = run_with({{crumble::void_ratio_stress_key(5e6), 0.55}, {crumble::void_ratio_stress_key(1e7), 0.45}});
+  r.events = {kEventsHeader,
+              {"0.01", "200", "2.3e6", "0", "0.002", "0", "70", "intact", "80", "0", "", "", "0", ""},
+              {"0.02", "400", "4.1e6", "3", "0.002", "0", "70", "split", "90", "2", "1;1", "1;1", "0", "hull"},
+              {"0.03", "600", "4.9e6", "1", "0.0003", "1", "70", "split", "150", "0", "", "", "1e-12", "hull"},
+              {"0.04", "800", "5.0e6", "0", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"},
+              {"0.05", "900", "4.8e6", "5", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"},
+              {"0.06", "990", "9.9e6", "6", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"}};
+  const auto m5 = find_metric("breakage_events_at_stress_5e6", "test");
+  EXPECT_EQ(m5.unit, "1");
+  ASSERT_TRUE(m5.value(r, m5.name).has_value());
+  EXPECT_EQ(*m5.value(r, m5.name), 2);  // the row at 5.0e6 and all after it are past the level
+  const auto m10 = find_metric("breakage_events_at_stress_1e7", "test");
+  EXPECT_EQ(*m10.value(r, m10.name), 5);
+  const auto m8 = find_metric("breakage_events_at_stress_8e6", "test");  // not reported
+  EXPECT_FALSE(m8.value(r, m8.name).has_value());
+  EXPECT_THROW(find_metric("breakage_events_at_stress_x", "test"), std::exception);
+}
