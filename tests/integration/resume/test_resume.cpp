@@ -155,6 +155,61 @@ void expect_same_files_but_wall_times(const fs::path& whole, const fs::path& kil
 
 }  // namespace
 
+// stages.csv of a killed and resumed run against the uninterrupted one's.
+static void expect_same_stages(const fs::path& whole, const fs::path& killed, const nlohmann::json& sa,
+                               const nlohmann::json& sb, long kill_step) {
+  // stages.csv: the same stages, steps, grains and analysis counts; wall times are the process's.
+  const std::set<std::string> wall_columns{"resumed", "wall_s", "wall_total_s", "engine_s", "engine_ms_per_step",
+                                           "analysis_s", "mean_analysis_ms", "breaking_share_of_analysis_time",
+                                           "fragments_s"};
+  EXPECT_EQ(without_columns(slurp(whole / "stages.csv"), wall_columns),
+            without_columns(slurp(killed / "stages.csv"), wall_columns))
+      << "kill step " << kill_step;
+  {
+    // Its stages add up to the run: every analysis and breakage event in exactly one stage.
+    const auto rows = crumble::read_csv((whole / "stages.csv").string());
+    ASSERT_GE(rows.size(), 2u);
+    const std::size_t ca = column(rows, "analyses"), ce = column(rows, "breaking_analyses");
+    long na = 0, ne = 0;
+    for (std::size_t i = 1; i < rows.size(); ++i) na += std::stol(rows[i][ca]), ne += std::stol(rows[i][ce]);
+    EXPECT_EQ(na, sa["analyses"].get<long>());
+    EXPECT_EQ(ne, sa["breakage_events"].get<long>());
+  }
+  {
+    // The stage the resume fell into: its engine time is this process's, so its time per step
+    // is over the steps since the resume, not since the stage began.
+    const auto rows = crumble::read_csv((killed / "stages.csv").string());
+    ASSERT_GE(rows.size(), 2u);
+    const std::size_t c_step = column(rows, "step"), c_steps = column(rows, "steps"),
+                      c_engine = column(rows, "engine_s"), c_per = column(rows, "engine_ms_per_step");
+    const long resumed_at = sb["resumed_from_step"].get<long>();
+    bool seen = false;
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+      const long end = std::stol(rows[i][c_step]), begin = end - std::stol(rows[i][c_steps]);
+      if (!(begin < resumed_at && resumed_at < end)) continue;
+      seen = true;
+      EXPECT_NEAR(std::stod(rows[i][c_per]), 1e3 * std::stod(rows[i][c_engine]) / (end - resumed_at),
+                  1e-6 * std::stod(rows[i][c_per]))
+          << "stage ending at step " << end << ", resumed at " << resumed_at;
+    }
+    if (!seen) std::cerr << "(the resume fell on a stage boundary: no stage to check)\n";
+  }
+}
+
+// The checkpoint holds the engine state and every grain's strength values.
+static void expect_engine_state_and_strengths(const fs::path& killed) {
+  const auto cp = nlohmann::json::parse(slurp(killed / "checkpoint.json"));
+  ASSERT_TRUE(cp.contains("engine_state"));
+  EXPECT_EQ(cp["engine_state"]["engine"], "lsdem");
+  EXPECT_FALSE(cp["engine_state"]["pairs"].empty());
+  int remembered = 0;
+  for (const auto& g : cp["grains"]) {
+    EXPECT_FALSE(g["strength"].empty());
+    remembered += g.contains("intact_load");
+  }
+  EXPECT_GT(remembered, 0);
+}
+
 // lsdem saves its contact history, half-step velocities and platen motion in the checkpoint
 // (Engine::save_state), and the checkpoint saves the shapes' mass properties as they were:
 // a run killed with SIGKILL at a (seeded) random step after its first checkpoint and resumed
@@ -209,59 +264,14 @@ static void lsdem_kill_and_resume(const std::string& name, const std::string& ex
     EXPECT_EQ(sa[k], sb[k]) << k;
 
   expect_same_files_but_wall_times(whole, killed, kill_step);
-  // stages.csv: the same stages, steps, grains and analysis counts; wall times are the process's.
-  const std::set<std::string> wall_columns{"resumed", "wall_s", "wall_total_s", "engine_s", "engine_ms_per_step",
-                                           "analysis_s", "mean_analysis_ms", "breaking_share_of_analysis_time",
-                                           "fragments_s"};
-  EXPECT_EQ(without_columns(slurp(whole / "stages.csv"), wall_columns),
-            without_columns(slurp(killed / "stages.csv"), wall_columns))
-      << "kill step " << kill_step;
-  {
-    // Its stages add up to the run: every analysis and breakage event in exactly one stage.
-    const auto rows = crumble::read_csv((whole / "stages.csv").string());
-    ASSERT_GE(rows.size(), 2u);
-    const std::size_t ca = column(rows, "analyses"), ce = column(rows, "breaking_analyses");
-    long na = 0, ne = 0;
-    for (std::size_t i = 1; i < rows.size(); ++i) na += std::stol(rows[i][ca]), ne += std::stol(rows[i][ce]);
-    EXPECT_EQ(na, sa["analyses"].get<long>());
-    EXPECT_EQ(ne, sa["breakage_events"].get<long>());
-  }
-  {
-    // The stage the resume fell into: its engine time is this process's, so its time per step
-    // is over the steps since the resume, not since the stage began.
-    const auto rows = crumble::read_csv((killed / "stages.csv").string());
-    ASSERT_GE(rows.size(), 2u);
-    const std::size_t c_step = column(rows, "step"), c_steps = column(rows, "steps"),
-                      c_engine = column(rows, "engine_s"), c_per = column(rows, "engine_ms_per_step");
-    const long resumed_at = sb["resumed_from_step"].get<long>();
-    bool seen = false;
-    for (std::size_t i = 1; i < rows.size(); ++i) {
-      const long end = std::stol(rows[i][c_step]), begin = end - std::stol(rows[i][c_steps]);
-      if (!(begin < resumed_at && resumed_at < end)) continue;
-      seen = true;
-      EXPECT_NEAR(std::stod(rows[i][c_per]), 1e3 * std::stod(rows[i][c_engine]) / (end - resumed_at),
-                  1e-6 * std::stod(rows[i][c_per]))
-          << "stage ending at step " << end << ", resumed at " << resumed_at;
-    }
-    if (!seen) std::cerr << "(the resume fell on a stage boundary: no stage to check)\n";
-  }
+  expect_same_stages(whole, killed, sa, sb, kill_step);
   // summary.json: equal but for wall times, the resume marker and the representation counts
   // (a cost of the process: a resumed run counts what it rebuilt from the checkpoint).
   nlohmann::json ja = sa, jb = sb;
   for (auto* j : {&ja, &jb})
     for (const char* k : {"wall_seconds", "time_breakdown_s", "resumed_from_step", "representations_built"}) j->erase(k);
   EXPECT_EQ(ja.dump(1), jb.dump(1));
-  // The checkpoint holds the engine state and every grain's strength values.
-  const auto cp = nlohmann::json::parse(slurp(killed / "checkpoint.json"));
-  ASSERT_TRUE(cp.contains("engine_state"));
-  EXPECT_EQ(cp["engine_state"]["engine"], "lsdem");
-  EXPECT_FALSE(cp["engine_state"]["pairs"].empty());
-  int remembered = 0;
-  for (const auto& g : cp["grains"]) {
-    EXPECT_FALSE(g["strength"].empty());
-    remembered += g.contains("intact_load");
-  }
-  EXPECT_GT(remembered, 0);
+  expect_engine_state_and_strengths(killed);
 }
 
 TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {

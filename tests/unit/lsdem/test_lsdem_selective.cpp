@@ -33,12 +33,7 @@ EngineContext context(Vec3 gravity = {}) {
   return c;
 }
 
-Shape::Ptr sphere(double r, double h, int nodes) {
-  ShapeResolution res;
-  res.level_set_spacing = h;
-  res.surface_nodes = nodes;
-  return Shape::sphere(r, res);
-}
+Shape::Ptr sphere(double r, double h, int nodes) { return crumble::testing_support::level_set_sphere(r, h, nodes); }
 
 // A grain's own stable step at its true mass: dt_safety·√(ρV/k).
 double own_step(const LsdemSettings& s, const Shape::Ptr& sh) { return s.dt_safety * std::sqrt(kRho * sh->volume() / s.kn); }

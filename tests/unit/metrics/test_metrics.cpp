@@ -178,13 +178,12 @@ TEST(Pareto, FrontByHand) {
 // reached (its void ratio is in summary.json); nothing for a level it did not reach.
 TEST(Metrics, BreakageEventsBeforeAReportedLevel) {
   RunOutputs r = run_with({{crumble::void_ratio_stress_key(5e6), 0.55}, {crumble::void_ratio_stress_key(1e7), 0.45}});
-  r.events = {kEventsHeader,
-              {"0.01", "200", "2.3e6", "0", "0.002", "0", "70", "intact", "80", "0", "", "", "0", ""},
-              {"0.02", "400", "4.1e6", "3", "0.002", "0", "70", "split", "90", "2", "1;1", "1;1", "0", "hull"},
-              {"0.03", "600", "4.9e6", "1", "0.0003", "1", "70", "split", "150", "0", "", "", "1e-12", "hull"},
-              {"0.04", "800", "5.0e6", "0", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"},
-              {"0.05", "900", "4.8e6", "5", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"},
-              {"0.06", "990", "9.9e6", "6", "0.002", "0", "70", "split", "180", "2", "1;1", "1;1", "0", "hull"}};
+  // Rows at a platen stress with a number of children and a removed volume.
+  auto row = [](const char* stress, const char* children, const char* removed) {
+    return std::vector<std::string>{"0", "0", stress, "0", "0.002", "0", "70", "split", "1", children, "", "", removed, "hull"};
+  };
+  r.events = {kEventsHeader,      row("2.3e6", "0", "0"),     row("4.1e6", "2", "0"), row("4.9e6", "0", "1e-12"),
+              row("5.0e6", "2", "0"), row("4.8e6", "2", "0"), row("9.9e6", "2", "0")};
   const auto m5 = find_metric("breakage_events_at_stress_5e6", "test");
   EXPECT_EQ(m5.unit, "1");
   ASSERT_TRUE(m5.value(r, m5.name).has_value());
