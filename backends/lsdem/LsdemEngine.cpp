@@ -150,6 +150,8 @@ LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)),
   if (s_.wall_kn == 0) s_.wall_kn = s_.kn;
   if (s_.selective_scaling_dt > 0 && s_.selective_scaling_fraction > 0)
     throw std::invalid_argument("lsdem: give selective_scaling_dt or selective_scaling_fraction, not both");
+  if (s_.kn_reference_radius > 0 && s_.contact_law == "hertz")
+    throw std::invalid_argument("lsdem: kn_reference_radius is for the linear law (the hertz law's stiffness already follows √R*)");
   target_dt_ = s_.selective_scaling_dt;
 }
 
@@ -359,23 +361,29 @@ double LsdemEngine::stiffness_bound() const {
   return 2 * estar * std::sqrt(rmax * s_.hertz_reference_overlap * rmin);
 }
 
-double LsdemEngine::max_stable_dt() const {
-  if (bodies_.empty()) return std::numeric_limits<double>::infinity();
-  double mmin = std::numeric_limits<double>::infinity();
-  for (const auto& b : bodies_) mmin = std::min(mmin, b.m);
-  return s_.dt_safety * std::sqrt(mmin / stiffness_bound());
-}
+double LsdemEngine::max_stable_dt() const { return stable_dt(false); }
 
-double LsdemEngine::unscaled_stable_dt() const {
+double LsdemEngine::unscaled_stable_dt() const { return stable_dt(true); }
+
+double LsdemEngine::stable_dt(bool unscaled) const {
   if (bodies_.empty()) return std::numeric_limits<double>::infinity();
+  if (s_.kn_reference_radius > 0) {
+    // Every contact of a grain is at most as stiff as k·R/R_ref (R the grain's radius): its
+    // own step is dt_safety·√(m·R_ref/(k·R)), and the stable step the smallest of them.
+    double q = std::numeric_limits<double>::infinity();
+    for (const auto& b : bodies_) q = std::min(q, (unscaled ? b.md : b.m) / b.sd->r_eq);
+    return s_.dt_safety * std::sqrt(q * s_.kn_reference_radius / stiffness_bound());
+  }
   double mmin = std::numeric_limits<double>::infinity();
-  for (const auto& b : bodies_) mmin = std::min(mmin, b.md);
+  for (const auto& b : bodies_) mmin = std::min(mmin, unscaled ? b.md : b.m);
   return s_.dt_safety * std::sqrt(mmin / stiffness_bound());
 }
 
 void LsdemEngine::apply_selective_scaling(Body& b) const {
-  // Own step dt_safety·√(m/k) = target at m = k·(target/dt_safety)².
-  const double need = stiffness_bound() * (target_dt_ / s_.dt_safety) * (target_dt_ / s_.dt_safety);
+  // Own step dt_safety·√(m/k) = target at m = k·(target/dt_safety)² (k of its own contacts).
+  double k = stiffness_bound();
+  if (s_.kn_reference_radius > 0) k *= b.sd->r_eq / s_.kn_reference_radius;
+  const double need = k * (target_dt_ / s_.dt_safety) * (target_dt_ / s_.dt_safety);
   set_selective_factor(b, target_dt_ > 0 && b.md < need ? need / b.md : 1.0);
 }
 
@@ -760,7 +768,7 @@ Law base_law(const LsdemSettings& s) {
 // The law of grain A (material ma) on a wall, plane or shape.
 Law wall_law(const LsdemSettings& s, double friction_scale, const Material& ma, const LsdemEngine::Body& A) {
   Law L = base_law(s);
-  L.kn = s.wall_kn;
+  L.kn = s.kn_reference_radius > 0 ? s.wall_kn * (A.sd->r_eq / s.kn_reference_radius) : s.wall_kn;
   L.mu = ma.wall_friction * friction_scale;
   L.mstar = A.m;
   if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(A.sd->r_eq);
@@ -771,7 +779,7 @@ Law wall_law(const LsdemSettings& s, double friction_scale, const Material& ma, 
 Law grain_law(const LsdemSettings& s, double friction_scale, const Material& ma, const Material& mb,
               const LsdemEngine::Body& A, const LsdemEngine::Body& B) {
   Law L = base_law(s);
-  L.kn = s.kn;
+  L.kn = s.kn_reference_radius > 0 ? s.kn * (std::min(A.sd->r_eq, B.sd->r_eq) / s.kn_reference_radius) : s.kn;
   L.mu = std::min(ma.friction, mb.friction) * friction_scale;
   L.mstar = A.m * B.m / (A.m + B.m);
   if (L.hertz) {
@@ -1304,6 +1312,10 @@ const OptionTable& lsdem_options() {
         opt::choice("contact_law", &S::contact_law, {"linear", "hertz"},
                     "normal force k_n·δ (\"linear\") or Hertzian (4/3)·E*·√R*·δ^(3/2) (\"hertz\", 3D only)"),
         opt::positive("kn", &S::kn, "N/m", "grain–grain normal stiffness (Harmon et al. 2020 Table 2); 2D: per metre of thickness"),
+        opt::number("kn_reference_radius", &S::kn_reference_radius, 0, inf, "m",
+                    "linear law: a contact's normal stiffness is kn (wall_kn) × R/this, R the smaller equivalent "
+                    "radius of the pair (a wall contact: the grain's), so a fragment's own step falls with R rather "
+                    "than R^1.5; 0 = kn for every contact"),
         opt::number("ks_ratio", &S::ks_ratio, 0, 10, "", "k_s / k_n (Harmon et al. 2020 Table 2)"),
         opt::number("wall_kn", &S::wall_kn, 0, inf, "N/m", "grain–wall normal stiffness; 0 = kn"),
         opt::number("damping_ratio", &S::damping_ratio, 0, 10, "", "contact critical-damping ratio ζ (Harmon et al. 2020 Table 2)"),
@@ -1334,6 +1346,8 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
     cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
+  if (s.kn_reference_radius > 0 && s.contact_law == "hertz")
+    cfg.fail("kn_reference_radius", "is for the linear contact law (the hertz law's stiffness already follows √R*)");
   if (s.selective_scaling_dt > 0 && s.selective_scaling_fraction > 0)
     cfg.fail("selective_scaling_fraction", "give selective_scaling_dt (an absolute target step) or "
                                            "selective_scaling_fraction, not both");

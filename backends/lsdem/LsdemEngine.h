@@ -45,6 +45,12 @@
 // largest factor, the grains scaled), and its kinetic energy (added_kinetic_energy) is added
 // to the grains' kinetic energy that the energy guard bounds (core/Guards.h).
 //
+// Size-following stiffness (kn_reference_radius > 0, linear law only): a contact's normal
+// stiffness is kn·R/R_ref (grain–wall: wall_kn·R/R_ref), R the smaller equivalent radius of
+// the pair, as a Hertz-like contact's stiffness grows with its radius. A grain's contacts are
+// then at most k·R_i/R_ref stiff, so its own step is dt_safety·√(m_i·R_ref/(k·R_i)) ∝ R_i (3D)
+// instead of R_i^1.5, and max_stable_dt() is the smallest of them. Off (0) by default.
+//
 // Contact search: bounding spheres hashed into a uniform grid of cells build a Verlet list
 // of the pairs within a skin (pair_list_skin, 0.2 × the largest bounding radius), rebuilt only when two
 // grains may together have moved farther than the skin (broad phase); per
@@ -77,6 +83,7 @@ namespace crumble {
 struct LsdemSettings {
   std::string contact_law = "linear";  // "linear" | "hertz" (hertz: 3D only)
   double kn = 4e7;                      // N/m, grain–grain normal stiffness (Harmon et al. 2020 Table 2)
+  double kn_reference_radius = 0;       // m: kn × R_min / this per contact (linear law); 0 = kn everywhere
   double ks_ratio = 0.6;                // k_s / k_n (Harmon et al. 2020 Table 2)
   double wall_kn = 0;                   // N/m, grain–wall; 0 = kn
   double damping_ratio = 0.4;           // normal critical-damping ratio ζ (Harmon et al. 2020 Table 1 C_res)
@@ -241,6 +248,7 @@ class LsdemEngine final : public Engine {
   // (factor 1 below it, or when off); the target fixed at the first step (fraction mode).
   double stiffness_bound() const;
   double unscaled_stable_dt() const;
+  double stable_dt(bool unscaled) const;
   void apply_selective_scaling(Body& b) const;
   void set_selective_factor(Body& b, double sel) const;
   // restore_state's reader of the target step and the factors (by grain id).

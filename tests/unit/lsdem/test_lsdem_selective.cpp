@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "backends/lsdem/LsdemEngine.h"
@@ -251,4 +252,42 @@ TEST(LsdemSelective, BothTargetsAreRefused) {
   nlohmann::json neg = {{"engine", {{"type", "lsdem"}, {"selective_scaling_fraction", 1.5}}}};
   Config r2(neg);
   EXPECT_THROW(make_lsdem_engine(r2.child("engine"), context()), ConfigError);
+}
+
+// Size-following stiffness (engine.kn_reference_radius): a contact's force is the constant-kn
+// contact's × R_min/R_ref (the same nodes penetrate: exact to rounding), grain–grain and on a
+// wall; the stable step is the smallest dt_safety·√(m·R_ref/(k·R)) over the grains.
+TEST(LsdemSizeStiffness, ForceAndStepFollowTheRadius) {
+  LsdemSettings s;
+  s.kn = 1e6;
+  s.damping_ratio = 0;
+  const auto big = sphere(1.0, 0.05, 2000), small = sphere(0.5, 0.025, 1000);
+  const double rref = 0.8;
+  auto forces = [&](const LsdemSettings& st) {
+    LsdemEngine e(st, context());
+    Container box;
+    box.lx = box.ly = 10;
+    e.set_container(box);
+    e.add_grain(grain(0, big, {5, 5, 3}));
+    e.add_grain(grain(1, small, {5, 5, 3 + 1.5 - 0.02}));  // pressed into the big one
+    e.add_grain(grain(2, small, {2, 2, 0.5 - 0.01}));      // pressed into the floor
+    e.step(1e-9);
+    std::map<std::pair<GrainId, GrainId>, double> f;
+    for (const auto& c : e.contacts()) f[{std::min(c.a, c.b), std::max(c.a, c.b)}] = norm(c.force);
+    return std::make_pair(f, e.max_stable_dt());
+  };
+  const auto [f0, dt0] = forces(s);
+  s.kn_reference_radius = rref;
+  const auto [f1, dt1] = forces(s);
+  ASSERT_EQ(f0.size(), 2u);
+  ASSERT_EQ(f1.size(), 2u);
+  const double r_small = 0.5 * small->equivalent_diameter(), r_big = 0.5 * big->equivalent_diameter();
+  for (const auto& [k, v] : f0) EXPECT_NEAR(f1.at(k) / v, r_small / rref, 1e-12) << k.first << " " << k.second;
+  const double q = std::min(kRho * small->volume() / r_small, kRho * big->volume() / r_big);
+  EXPECT_NEAR(dt1 / (s.dt_safety * std::sqrt(q * rref / s.kn)), 1.0, 1e-12);
+  EXPECT_NEAR(dt0 / own_step(s, small), 1.0, 1e-12);
+  // Hertz already follows the radius: refused.
+  nlohmann::json doc = {{"engine", {{"type", "lsdem"}, {"contact_law", "hertz"}, {"kn_reference_radius", 1e-3}}}};
+  Config root(doc);
+  EXPECT_THROW(make_lsdem_engine(root.child("engine"), context()), ConfigError);
 }
