@@ -148,11 +148,11 @@ LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)),
                                   "Young's modulus / Poisson ratio");
   if (s_.threads < 1) s_.threads = 1;
   if (s_.wall_kn == 0) s_.wall_kn = s_.kn;
-  if (s_.selective_scaling_dt > 0 && s_.selective_scaling_fraction > 0)
-    throw std::invalid_argument("lsdem: give selective_scaling_dt or selective_scaling_fraction, not both");
+  if (s_.selective_dt > 0 && s_.selective_dt_fraction > 0)
+    throw std::invalid_argument("lsdem: give selective_dt or selective_dt_fraction, not both");
   if (s_.kn_reference_radius > 0 && s_.contact_law == "hertz")
     throw std::invalid_argument("lsdem: kn_reference_radius is for the linear law (the hertz law's stiffness already follows √R*)");
-  target_dt_ = s_.selective_scaling_dt;
+  target_dt_ = s_.selective_dt;
 }
 
 LsdemEngine::~LsdemEngine() = default;
@@ -398,12 +398,12 @@ void LsdemEngine::set_selective_factor(Body& b, double sel) const {
 
 void LsdemEngine::fix_selective_target() {
   if (target_dt_ > 0 || bodies_.empty()) return;
-  target_dt_ = s_.selective_scaling_fraction * unscaled_stable_dt();
+  target_dt_ = s_.selective_dt_fraction * unscaled_stable_dt();
   for (auto& b : bodies_) apply_selective_scaling(b);
 }
 
 std::map<std::string, double> LsdemEngine::summary_figures() const {
-  if (!(s_.selective_scaling_dt > 0) && !(s_.selective_scaling_fraction > 0)) return {};
+  if (!(s_.selective_dt > 0) && !(s_.selective_dt_fraction > 0)) return {};
   double added = 0, total = 0, smax = 1;
   long scaled = 0;
   for (const auto& b : bodies_) {
@@ -448,7 +448,7 @@ std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
 void LsdemEngine::step(double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("lsdem: time step must be > 0");
   const auto t0 = Clock::now();
-  if (!(target_dt_ > 0) && s_.selective_scaling_fraction > 0) fix_selective_target();
+  if (!(target_dt_ > 0) && s_.selective_dt_fraction > 0) fix_selective_target();
   compute_forces(dt);
   integrate(dt);
   stats_.steps++;
@@ -1102,7 +1102,7 @@ bool LsdemEngine::save_state(nlohmann::json& out) const {
   }
   // Selective mass scaling (only when on: a run without it writes the state it always did):
   // the target step and every scaled grain's factor (fixed when the grain was added).
-  if (s_.selective_scaling_dt > 0 || s_.selective_scaling_fraction > 0) {
+  if (s_.selective_dt > 0 || s_.selective_dt_fraction > 0) {
     J factors = J::array();
     for (const auto& b : bodies_)
       if (b.sel != 1) factors.push_back(J::array({b.id, b.sel}));
@@ -1281,7 +1281,7 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
 
 std::pair<double, std::map<GrainId, double>> LsdemEngine::read_selective(StateReader& rd, const nlohmann::json& j) const {
   std::pair<double, std::map<GrainId, double>> out{target_dt_, {}};
-  const bool on = s_.selective_scaling_dt > 0 || s_.selective_scaling_fraction > 0;
+  const bool on = s_.selective_dt > 0 || s_.selective_dt_fraction > 0;
   rd.at = "selective_scaling";
   if (!on) {
     if (j.contains("selective_scaling")) rd.fail("written with selective mass scaling, which this scenario does not use");
@@ -1324,12 +1324,12 @@ const OptionTable& lsdem_options() {
         opt::number("hertz_reference_overlap", &S::hertz_reference_overlap, 1e-9, 0.5, "",
                     "overlap / smallest equivalent radius at which the Hertz stiffness sets the stable step"),
         opt::positive("mass_scale", &S::mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
-        opt::number("selective_scaling_dt", &S::selective_scaling_dt, 0, inf, "s",
+        opt::number("selective_dt", &S::selective_dt, 0, inf, "s",
                     "selective mass scaling: a grain whose own stable step dt_safety·√(m/k) is below this gets "
                     "its mass and inertia × (this / own step)², weight unchanged; 0 = off"),
-        opt::number("selective_scaling_fraction", &S::selective_scaling_fraction, 0, 1, "",
+        opt::number("selective_dt_fraction", &S::selective_dt_fraction, 0, 1, "",
                     "selective mass scaling with the target step = this × the stable step of the packing first "
-                    "stepped (the initial packing); 0 = off; not with selective_scaling_dt"),
+                    "stepped (the initial packing); 0 = off; not with selective_dt"),
         opt::number("pair_list_skin", &S::pair_list_skin, 0, 10, "",
                     "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
                     "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "
@@ -1348,9 +1348,9 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
     cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
   if (s.kn_reference_radius > 0 && s.contact_law == "hertz")
     cfg.fail("kn_reference_radius", "is for the linear contact law (the hertz law's stiffness already follows √R*)");
-  if (s.selective_scaling_dt > 0 && s.selective_scaling_fraction > 0)
-    cfg.fail("selective_scaling_fraction", "give selective_scaling_dt (an absolute target step) or "
-                                           "selective_scaling_fraction, not both");
+  if (s.selective_dt > 0 && s.selective_dt_fraction > 0)
+    cfg.fail("selective_dt_fraction", "give selective_dt (an absolute target step) or "
+                                           "selective_dt_fraction, not both");
   return std::make_unique<LsdemEngine>(s, ctx);
 }
 

@@ -32,11 +32,11 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
-// Selective mass scaling (off by default; selective_scaling_dt or selective_scaling_fraction):
+// Selective mass scaling (off by default; selective_dt or selective_dt_fraction):
 // a grain whose own stable step dt_safety·√(m/k_max) is below a target step gets its mass
 // and its inertia tensor multiplied by s = (target / own step)² (so its own step equals the
 // target, and its radius of gyration is kept); grains at or above the target are untouched.
-// The target is selective_scaling_dt (s), or selective_scaling_fraction × the stable step of
+// The target is selective_dt (s), or selective_dt_fraction × the stable step of
 // the packing the engine first steps (the initial packing: with a fraction ≤ 1 none of its
 // grains is scaled; the fragments born later are). The factor is fixed when the grain is
 // added. Weight uses the true mass (gravity never sees the added mass), and so do the
@@ -91,8 +91,8 @@ struct LsdemSettings {
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
   double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged
-  double selective_scaling_dt = 0;        // s: target step of selective mass scaling; 0 = off
-  double selective_scaling_fraction = 0;  // target = this × the initial packing's stable step; 0 = off
+  double selective_dt = 0;           // s: target step of selective mass scaling; 0 = off
+  double selective_dt_fraction = 0;  // target = this × the initial packing's stable step; 0 = off
   double pair_list_skin = 0.2;          // Verlet skin / largest bounding radius (0: list rebuilt every step)
   int threads = 1;
 };

@@ -279,13 +279,13 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
   lsdem_kill_and_resume("bit_identical", "", sa);
 }
 
-// Selective mass scaling (engine.selective_scaling_fraction 1: every fragment below the
+// Selective mass scaling (engine.selective_dt_fraction 1: every fragment below the
 // initial packing's stable step is scaled up to it): the target and the factors are in the
 // checkpoint's engine state, and the killed and resumed run is the uninterrupted one byte
 // for byte, its added mass (summary.json) included.
 TEST(Resume, LsdemSelectiveScalingResumedAfterSigkillIsBitIdentical) {
   nlohmann::json sa;
-  lsdem_kill_and_resume("selective_scaling", " --set engine.selective_scaling_fraction=1", sa);
+  lsdem_kill_and_resume("selective_scaling", " --set engine.selective_dt_fraction=1", sa);
   if (HasFatalFailure()) return;
   ASSERT_TRUE(sa.contains("engine_selective_scaling_grains_scaled")) << sa.dump(1);
   EXPECT_GT(sa["engine_selective_scaling_grains_scaled"].get<double>(), 0);

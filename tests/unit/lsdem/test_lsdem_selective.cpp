@@ -1,4 +1,4 @@
-// lsdem selective mass scaling (engine.selective_scaling_dt / selective_scaling_fraction):
+// lsdem selective mass scaling (engine.selective_dt / selective_dt_fraction):
 // a grain below the target step gets mass and inertia × (target / own step)² — its own step
 // is then the target (closed form); its acceleration under a force is F/(s·m) and its weight
 // stays m·g; the added mass and its kinetic energy are reported; an inactive target changes
@@ -53,7 +53,7 @@ TEST(LsdemSelective, ScaledGrainStepEqualsTheTarget) {
   ASSERT_LT(own_step(s, small), target);
   ASSERT_GT(own_step(s, big), target);
   LsdemEngine plain(s, context());
-  s.selective_scaling_dt = target;
+  s.selective_dt = target;
   LsdemEngine e(s, context());
   for (LsdemEngine* x : {&plain, &e}) {
     x->add_grain(grain(0, big, {0, 0, 5}));
@@ -81,7 +81,7 @@ TEST(LsdemSelective, AddedKineticEnergyIsTheScaledInertias) {
   s.kn = 1e6;
   const auto small = sphere(0.2, 0.02, 400);
   const double target = 3 * own_step(s, small), factor = 9;
-  s.selective_scaling_dt = target;
+  s.selective_dt = target;
   LsdemEngine e(s, context());
   Grain g = grain(0, small, {0, 0, 5}, Quat::from_axis_angle({1, 2, 3}, 0.4));
   g.velocity = {0.3, -0.2, 0.1};
@@ -102,7 +102,7 @@ TEST(LsdemSelective, ContactAccelerationUsesTheScaledMass) {
   s.damping_ratio = 0;
   const auto sh = sphere(1.0, 0.025, 8000);
   const double delta = 0.02, factor = 16;
-  s.selective_scaling_dt = 4 * own_step(s, sh);
+  s.selective_dt = 4 * own_step(s, sh);
   LsdemEngine e(s, context());
   Container box;
   box.lx = box.ly = 10;
@@ -130,12 +130,12 @@ TEST(LsdemSelective, WeightUsesTheTrueMass) {
   s.global_damping = 1;
   const auto sh = sphere(1.0, 0.05, 4000);
   const double factor = 25;
-  s.selective_scaling_dt = 5 * own_step(s, sh);
+  s.selective_dt = 5 * own_step(s, sh);
   LsdemEngine e(s, context({0, 0, -9.81}));
   e.set_container({});
   e.add_grain(grain(0, sh, {0, 0, 1.5}));
   const double dt = e.max_stable_dt();
-  EXPECT_NEAR(dt / s.selective_scaling_dt, 1.0, 1e-12);
+  EXPECT_NEAR(dt / s.selective_dt, 1.0, 1e-12);
   std::vector<Grain> g(1);
   g[0].id = 0;
   e.step(dt);
@@ -167,10 +167,10 @@ TEST(LsdemSelective, AnInactiveTargetChangesNoBit) {
     return st_out.dump() + std::to_string(e.platen_position()) + std::to_string(e.platen_force());
   };
   const std::string off = run(s);
-  s.selective_scaling_dt = 1e-12;
+  s.selective_dt = 1e-12;
   EXPECT_EQ(off, run(s));
-  s.selective_scaling_dt = 0;
-  s.selective_scaling_fraction = 1;  // the initial packing's own step: nothing below it
+  s.selective_dt = 0;
+  s.selective_dt_fraction = 1;  // the initial packing's own step: nothing below it
   EXPECT_EQ(off, run(s));
 }
 
@@ -179,7 +179,7 @@ TEST(LsdemSelective, AnInactiveTargetChangesNoBit) {
 TEST(LsdemSelective, FractionOfTheInitialStep) {
   LsdemSettings s;
   s.kn = 1e6;
-  s.selective_scaling_fraction = 0.5;
+  s.selective_dt_fraction = 0.5;
   LsdemEngine e(s, context());
   const auto big = sphere(1.0, 0.1, 1000), small = sphere(0.2, 0.02, 400);
   e.add_grain(grain(0, big, {0, 0, 5}));
@@ -197,7 +197,7 @@ TEST(LsdemSelective, FractionOfTheInitialStep) {
 TEST(LsdemSelective, StateRoundTripIsExact) {
   LsdemSettings s;
   s.kn = 2e4;
-  s.selective_scaling_fraction = 0.8;
+  s.selective_dt_fraction = 0.8;
   const auto big = sphere(0.15, 0.02, 300), tiny = sphere(0.04, 0.01, 200);
   std::vector<Grain> grains;
   auto fill = [&](LsdemEngine& e, bool with_tiny) {
@@ -233,7 +233,7 @@ TEST(LsdemSelective, StateRoundTripIsExact) {
   stripped.erase("selective_scaling");
   EXPECT_THROW(b.restore_state(stripped), std::invalid_argument);
   LsdemSettings off = s;
-  off.selective_scaling_fraction = 0;
+  off.selective_dt_fraction = 0;
   LsdemEngine c(off, context({0, 0, -9.81}));
   fill(c, true);
   EXPECT_THROW(c.restore_state(saved), std::invalid_argument);
@@ -241,15 +241,15 @@ TEST(LsdemSelective, StateRoundTripIsExact) {
 
 // Both targets at once is a configuration error naming the key.
 TEST(LsdemSelective, BothTargetsAreRefused) {
-  nlohmann::json doc = {{"engine", {{"type", "lsdem"}, {"selective_scaling_dt", 1e-7}, {"selective_scaling_fraction", 0.5}}}};
+  nlohmann::json doc = {{"engine", {{"type", "lsdem"}, {"selective_dt", 1e-7}, {"selective_dt_fraction", 0.5}}}};
   Config root(doc);
   try {
     make_lsdem_engine(root.child("engine"), context());
     FAIL() << "accepted both targets";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("selective_scaling_fraction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("selective_dt_fraction"), std::string::npos) << e.what();
   }
-  nlohmann::json neg = {{"engine", {{"type", "lsdem"}, {"selective_scaling_fraction", 1.5}}}};
+  nlohmann::json neg = {{"engine", {{"type", "lsdem"}, {"selective_dt_fraction", 1.5}}}};
   Config r2(neg);
   EXPECT_THROW(make_lsdem_engine(r2.child("engine"), context()), ConfigError);
 }
