@@ -81,6 +81,10 @@ class Engine {
   // evaluation (a penalty engine: lsdem, ½·k_n·δ² per contact, (2/5)·F_n·δ for Hertz). 0 for
   // an engine whose contacts are constraints (Bullet, ODE): it stores none.
   virtual double elastic_energy() const { return 0; }
+  // Kinetic energy (J; 2D: J/m) carried by mass the engine added to its grains for a
+  // larger stable step (lsdem's selective mass scaling), beyond their true masses. The
+  // energy guard adds it to the grains' kinetic energy (core/Guards.h). 0 by default.
+  virtual double added_kinetic_energy() const { return 0; }
   // Every active contact, grain–grain once (force on `a`) and grain–wall.
   virtual std::vector<Contact> contacts() const = 0;
 

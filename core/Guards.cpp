@@ -156,11 +156,13 @@ void check_overlaps(const GuardSettings& s, const GuardContext& at, std::span<co
 
 void check_energy(const GuardSettings& s, const GuardContext& at, std::span<const Grain> grains,
                   std::span<const Material> materials, int dimension, GuardReading& r) {
-  const double ke = kinetic_energy(grains, materials, dimension);
+  const double ke = kinetic_energy(grains, materials, dimension) + at.added_kinetic_energy;
   r.energy_ratio = at.energy_budget > 0 ? ke / at.energy_budget : 0;
   if (!std::isfinite(ke) || ke > s.energy_factor * at.energy_budget) {
     std::ostringstream os;
-    os << "the grains' kinetic energy " << ke << " J exceeds " << s.energy_factor
+    os << "the grains' kinetic energy " << ke << " J";
+    if (at.added_kinetic_energy > 0) os << " (" << at.added_kinetic_energy << " J of it in the mass added for the stable step)";
+    os << " exceeds " << s.energy_factor
        << " times the energy that can have entered the system (" << at.energy_budget
        << " J: initial kinetic energy, platen work, weight over the container height): the integration is unstable";
     fail(at, os.str());

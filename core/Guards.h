@@ -57,6 +57,12 @@ struct GuardContext {
   double energy_budget = 0;   // J (2D: J/m): energy that can have entered the system
   double reference_diameter = 0;  // m: mean equivalent diameter of the initial grains
   bool open = false;          // an open scene: no platen or void ratio; containment in the domain
+  // J (2D: J/m): kinetic energy of the mass an engine added for its stable step
+  // (Engine::added_kinetic_energy). The energy guard bounds the grains' kinetic energy plus
+  // this: no energy source feeds the added mass (weight acts on the true mass), so the
+  // scaled system's kinetic energy is bounded by the same budget, and an unstable scaled
+  // grain is caught at its scaled energy, not the smaller energy of its true mass.
+  double added_kinetic_energy = 0;
 };
 
 // O(1) checks on the state the loop already has: finite values, platen above the floor,

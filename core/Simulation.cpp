@@ -237,6 +237,7 @@ void Simulation::check_guards(const char* phase, double dt, bool full) {
   // (at least 1 m/s² so that a scene without gravity still has a scale).
   double mass = 0;
   for (const auto& g : grains_) mass += g.mass(ctx_.materials[g.material].density);
+  at.added_kinetic_energy = engine_->added_kinetic_energy();
   at.energy_budget = energy_in_ + mass * std::max(norm(ctx_.gravity), 1.0) * std::max(initial_height_, container_.height);
   const std::vector<Contact> cs = settings_.guards.max_overlap_fraction > 0 ? engine_->contacts() : std::vector<Contact>{};
   const GuardReading r =

@@ -112,6 +112,15 @@ std::optional<double> smallest_fragment_volume(const RunOutputs& r, const std::s
   return *std::min_element(v.begin(), v.end());
 }
 
+// A level written in a metric's name: a finite number >= 0, or NaN.
+double parse_level(const std::string& rest) {
+  if (rest.empty()) return std::nan("");
+  char* end = nullptr;
+  const double v = std::strtod(rest.c_str(), &end);
+  if (end != rest.c_str() + rest.size() || !std::isfinite(v) || v < 0) return std::nan("");
+  return v;
+}
+
 // void_ratio_at_stress_<Pa>[_Pa] / void_ratio_at_strain_<value>: the level's value, or NaN
 // when NAME is not of the family.
 double level_of(const std::string& name, bool& stress) {
@@ -127,11 +136,34 @@ double level_of(const std::string& name, bool& stress) {
   } else {
     return std::nan("");
   }
-  if (rest.empty()) return std::nan("");
-  char* end = nullptr;
-  const double v = std::strtod(rest.c_str(), &end);
-  if (end != rest.c_str() + rest.size() || !std::isfinite(v) || v < 0) return std::nan("");
-  return v;
+  return parse_level(rest);
+}
+
+// breakage_events_at_stress_<Pa>: the level, or NaN when NAME is not of the family.
+constexpr char kEventsAtStress[] = "breakage_events_at_stress_";
+double events_level_of(const std::string& name) {
+  const std::string p = kEventsAtStress;
+  return name.rfind(p, 0) == 0 ? parse_level(name.substr(p.size())) : std::nan("");
+}
+
+// The breakage rows of events.csv (children or removed fines) before the first row whose
+// platen stress reaches the level; nothing when the run never reached it (summary.json has
+// no void ratio there).
+std::optional<double> events_at_level(const RunOutputs& r, const std::string& name) {
+  const double level = events_level_of(name);
+  if (!std::isfinite(level) || !summary_number(r.summary, void_ratio_stress_key(level))) return std::nullopt;
+  if (r.events.empty()) return 0.0;
+  const auto& h = r.events[0];
+  const std::size_t st = column(h, "platen_stress_Pa"), ch = column(h, "children"), rm = column(h, "removed_volume_m3");
+  if (st == h.size() || ch == h.size() || rm == h.size()) return std::nullopt;
+  double n = 0;
+  for (std::size_t i = 1; i < r.events.size(); ++i) {
+    const auto& row = r.events[i];
+    if (row.size() <= std::max({st, ch, rm})) continue;
+    if (std::atof(row[st].c_str()) >= level) break;
+    if (std::atof(row[ch].c_str()) > 0 || std::atof(row[rm].c_str()) > 0) ++n;
+  }
+  return n;
 }
 
 std::optional<double> void_ratio_at_level(const RunOutputs& r, const std::string& name) {
@@ -219,12 +251,18 @@ Metric find_metric(const std::string& name, const std::string& where) {
   bool stress = true;
   const double level = level_of(name, stress);
   if (std::isfinite(level)) return level_metric(level, stress);
+  const double ev = events_level_of(name);
+  if (std::isfinite(ev))
+    return Metric{kEventsAtStress + fmt_num(ev), "1",
+                  "breakage events before the platen stress first reaches " + fmt_num(ev) +
+                      " Pa (a level in output.psd_at_stress)",
+                  &events_at_level};
   std::string known;
   for (const auto& m : metrics()) known += (known.empty() ? "" : ", ") + m.name + " (" + m.unit + ")";
   throw InputError(where + ": unknown metric '" + name + "'; known: " + known +
                    ", void_ratio_at_stress_<Pa> (e.g. void_ratio_at_stress_1e6) and void_ratio_at_strain_<value> "
                    "(e.g. void_ratio_at_strain_0.05) for a level the scenario reports (output.psd_at_stress, "
-                   "output.psd_at_strain)");
+                   "output.psd_at_strain), and breakage_events_at_stress_<Pa> for a level in output.psd_at_stress");
 }
 
 std::vector<Metric> available_metrics(const RunOutputs& run) {

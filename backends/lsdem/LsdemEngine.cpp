@@ -44,6 +44,10 @@ struct LsdemEngine::Body {
   Mat3 R;
   double m = 0, im = 0;
   Mat3 Ib, iIb;  // body-frame inertia and inverse (3D); 2D uses Ib(2,2)
+  // Selective mass scaling: the mass before it (density-scaled: weight is md / mass_scale)
+  // and its factor (m = md·sel, Ib likewise).
+  double md = 0, sel = 1;
+  Mat3 Ibd;
   Vec3 f, t;
   double moved = 0, turned = 0;  // |v|·dt and |ω|·dt of the last step
 };
@@ -144,6 +148,11 @@ LsdemEngine::LsdemEngine(LsdemSettings s, EngineContext ctx) : s_(std::move(s)),
                                   "Young's modulus / Poisson ratio");
   if (s_.threads < 1) s_.threads = 1;
   if (s_.wall_kn == 0) s_.wall_kn = s_.kn;
+  if (s_.selective_dt > 0 && s_.selective_dt_fraction > 0)
+    throw std::invalid_argument("lsdem: give selective_dt or selective_dt_fraction, not both");
+  if (s_.kn_reference_radius > 0 && s_.contact_law == "hertz")
+    throw std::invalid_argument("lsdem: kn_reference_radius is for the linear law (the hertz law's stiffness already follows √R*)");
+  target_dt_ = s_.selective_dt;
 }
 
 LsdemEngine::~LsdemEngine() = default;
@@ -209,6 +218,8 @@ void LsdemEngine::add_grain(const Grain& g) {
   b.m = rho * g.shape->volume() * s_.mass_scale;
   b.im = 1.0 / b.m;
   b.Ib = g.shape->mass_properties().inertia * (rho * s_.mass_scale);
+  b.md = b.m;
+  b.Ibd = b.Ib;
   b.x = g.position;
   b.v = g.velocity;
   b.w = g.angular_velocity;
@@ -229,6 +240,8 @@ void LsdemEngine::add_grain(const Grain& g) {
   index_[b.id] = bodies_.size();
   bodies_.push_back(b);
   near_valid_ = false;
+  // After the push: a hertz stiffness bound depends on the grains present.
+  if (target_dt_ > 0) apply_selective_scaling(bodies_.back());
 }
 
 void LsdemEngine::remove_grain(GrainId id) {
@@ -342,23 +355,95 @@ bool LsdemEngine::set_relaxation_damping(bool on) {
   return true;
 }
 
-double LsdemEngine::max_stable_dt() const {
-  if (bodies_.empty()) return std::numeric_limits<double>::infinity();
-  double mmin = std::numeric_limits<double>::infinity(), rmin = mmin, rmax = 0;
+double LsdemEngine::stiffness_bound() const {
+  if (s_.contact_law != "hertz") return std::max(s_.kn, s_.wall_kn);
+  // Tangent stiffness dF/dδ = 2 E* √(R* δ) at δ_ref, with the stiffest E* (grain on a
+  // rigid wall) and the largest R* (R* = R for a wall).
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0;
   for (const auto& b : bodies_) {
-    mmin = std::min(mmin, b.m);
     rmin = std::min(rmin, b.sd->r_eq);
     rmax = std::max(rmax, b.sd->r_eq);
   }
-  double k = std::max(s_.kn, s_.wall_kn);
-  if (s_.contact_law == "hertz") {
-    // Tangent stiffness dF/dδ = 2 E* √(R* δ) at δ_ref, with the stiffest E* (grain on a
-    // rigid wall) and the largest R* (R* = R for a wall).
-    double estar = 0;
-    for (const auto& m : ctx_.materials) estar = std::max(estar, m.young / (1 - m.poisson * m.poisson));
-    k = 2 * estar * std::sqrt(rmax * s_.hertz_reference_overlap * rmin);
+  double estar = 0;
+  for (const auto& m : ctx_.materials) estar = std::max(estar, m.young / (1 - m.poisson * m.poisson));
+  return 2 * estar * std::sqrt(rmax * s_.hertz_reference_overlap * rmin);
+}
+
+double LsdemEngine::max_stable_dt() const { return stable_dt(false); }
+
+double LsdemEngine::unscaled_stable_dt() const { return stable_dt(true); }
+
+double LsdemEngine::stable_dt(bool unscaled) const {
+  if (bodies_.empty()) return std::numeric_limits<double>::infinity();
+  if (s_.kn_reference_radius > 0) {
+    // Every contact of a grain is at most as stiff as k·R/R_ref (R the grain's radius): its
+    // own step is dt_safety·√(m·R_ref/(k·R)), and the stable step the smallest of them.
+    double q = std::numeric_limits<double>::infinity();
+    for (const auto& b : bodies_) q = std::min(q, (unscaled ? b.md : b.m) / b.sd->r_eq);
+    return s_.dt_safety * std::sqrt(q * s_.kn_reference_radius / stiffness_bound());
   }
-  return s_.dt_safety * std::sqrt(mmin / k);
+  double mmin = std::numeric_limits<double>::infinity();
+  for (const auto& b : bodies_) mmin = std::min(mmin, unscaled ? b.md : b.m);
+  return s_.dt_safety * std::sqrt(mmin / stiffness_bound());
+}
+
+void LsdemEngine::apply_selective_scaling(Body& b) const {
+  // Own step dt_safety·√(m/k) = target at m = k·(target/dt_safety)² (k of its own contacts).
+  double k = stiffness_bound();
+  if (s_.kn_reference_radius > 0) k *= b.sd->r_eq / s_.kn_reference_radius;
+  const double need = k * (target_dt_ / s_.dt_safety) * (target_dt_ / s_.dt_safety);
+  set_selective_factor(b, target_dt_ > 0 && b.md < need ? need / b.md : 1.0);
+}
+
+void LsdemEngine::set_selective_factor(Body& b, double sel) const {
+  if (sel == b.sel) return;
+  b.sel = sel;
+  b.m = sel == 1 ? b.md : b.md * sel;
+  b.im = 1.0 / b.m;
+  b.Ib = sel == 1 ? b.Ibd : b.Ibd * sel;
+  if (ctx_.dimension == 3) b.iIb = inverse(b.Ib);
+}
+
+void LsdemEngine::fix_selective_target() {
+  if (target_dt_ > 0 || bodies_.empty()) return;
+  target_dt_ = s_.selective_dt_fraction * unscaled_stable_dt();
+  for (auto& b : bodies_) apply_selective_scaling(b);
+}
+
+std::map<std::string, double> LsdemEngine::summary_figures() const {
+  if (!(s_.selective_dt > 0) && !(s_.selective_dt_fraction > 0)) return {};
+  double added = 0, total = 0, smax = 1;
+  long scaled = 0;
+  for (const auto& b : bodies_) {
+    const double m = b.md / s_.mass_scale;  // true mass
+    total += m;
+    added += (b.sel - 1) * m;
+    smax = std::max(smax, b.sel);
+    scaled += b.sel > 1 ? 1 : 0;
+  }
+  return {{"selective_scaling_target_dt_s", target_dt_},
+          {"selective_scaling_added_mass_kg", added},
+          {"selective_scaling_added_mass_fraction", total > 0 ? added / total : 0.0},
+          {"selective_scaling_max_factor", smax},
+          {"selective_scaling_grains_scaled", static_cast<double>(scaled)}};
+}
+
+double LsdemEngine::added_kinetic_energy() const {
+  double e = 0;
+  for (const auto& b : bodies_) {
+    if (!(b.sel > 1)) continue;
+    // ½(s − 1)·m_true·(v² + ω·Î·ω), Î the inertia per unit mass of the scaled body.
+    const double w = (b.sel - 1) * b.md / (s_.mass_scale * b.m);
+    double rot;
+    if (ctx_.dimension == 2) {
+      rot = b.Ib(2, 2) * b.w.z * b.w.z;
+    } else {
+      const Vec3 wb = b.R.transposed() * b.w;
+      rot = dot(wb, b.Ib * wb);
+    }
+    e += 0.5 * w * (b.m * norm2(b.v) + rot);
+  }
+  return e;
 }
 
 std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
@@ -371,6 +456,7 @@ std::vector<LsdemEngine::Wall> LsdemEngine::walls() const {
 void LsdemEngine::step(double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("lsdem: time step must be > 0");
   const auto t0 = Clock::now();
+  if (!(target_dt_ > 0) && s_.selective_dt_fraction > 0) fix_selective_target();
   compute_forces(dt);
   integrate(dt);
   stats_.steps++;
@@ -690,7 +776,7 @@ Law base_law(const LsdemSettings& s) {
 // The law of grain A (material ma) on a wall, plane or shape.
 Law wall_law(const LsdemSettings& s, double friction_scale, const Material& ma, const LsdemEngine::Body& A) {
   Law L = base_law(s);
-  L.kn = s.wall_kn;
+  L.kn = s.kn_reference_radius > 0 ? s.wall_kn * (A.sd->r_eq / s.kn_reference_radius) : s.wall_kn;
   L.mu = ma.wall_friction * friction_scale;
   L.mstar = A.m;
   if (L.hertz) L.khertz = 4.0 / 3.0 * ma.young / (1 - ma.poisson * ma.poisson) * std::sqrt(A.sd->r_eq);
@@ -701,7 +787,7 @@ Law wall_law(const LsdemSettings& s, double friction_scale, const Material& ma, 
 Law grain_law(const LsdemSettings& s, double friction_scale, const Material& ma, const Material& mb,
               const LsdemEngine::Body& A, const LsdemEngine::Body& B) {
   Law L = base_law(s);
-  L.kn = s.kn;
+  L.kn = s.kn_reference_radius > 0 ? s.kn * (std::min(A.sd->r_eq, B.sd->r_eq) / s.kn_reference_radius) : s.kn;
   L.mu = std::min(ma.friction, mb.friction) * friction_scale;
   L.mstar = A.m * B.m / (A.m + B.m);
   if (L.hertz) {
@@ -845,7 +931,7 @@ void LsdemEngine::narrow_phase(const std::vector<Wall>& W, double dt) {
 
 void LsdemEngine::apply_body_loads() {
   for (auto& b : bodies_) {
-    b.f = ctx_.gravity * (b.m / s_.mass_scale);
+    b.f = ctx_.gravity * (b.md / s_.mass_scale);  // the weight of the true mass
     b.t = {};
     const double c = s_.global_damping + relax_damping_;
     if (c > 0) {
@@ -968,7 +1054,7 @@ void LsdemEngine::integrate(double dt) {
     // global damping acts on the platen too.
     double M = 0;
     if (platen_.force_driven() && !(container_.platen_mass > 0)) {
-      for (const auto& b : bodies_) M += b.m;  // scaled masses
+      for (const auto& b : bodies_) M += b.md;  // density-scaled masses (no selective scaling)
       M /= s_.mass_scale;
     }
     M = platen_mass(container_, M, s_.mass_scale);
@@ -1022,6 +1108,14 @@ bool LsdemEngine::save_state(nlohmann::json& out) const {
                                 b.q.z, b.moved, b.turned, f.x, f.y, f.z}));
     }
     out["walls"] = std::move(walls);
+  }
+  // Selective mass scaling (only when on: a run without it writes the state it always did):
+  // the target step and every scaled grain's factor (fixed when the grain was added).
+  if (s_.selective_dt > 0 || s_.selective_dt_fraction > 0) {
+    J factors = J::array();
+    for (const auto& b : bodies_)
+      if (b.sel != 1) factors.push_back(J::array({b.id, b.sel}));
+    out["selective_scaling"] = J{{"target_dt", target_dt_}, {"factors", factors}};
   }
   return true;
 }
@@ -1169,6 +1263,7 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
   rd.at = "";
   const double fs = rd.num(rd.field(j, "friction_scale"));
   const double pf = rd.num(rd.field(j, "platen_force")), ff = rd.num(rd.field(j, "floor_force"));
+  const auto sel = read_selective(rd, j);
   // Everything checked: take it.
   bodies_ = std::move(order);
   index_.clear();
@@ -1186,6 +1281,34 @@ void LsdemEngine::restore_state(const nlohmann::json& j) {
     walls_kin_[k] = walls[k].first;
     shape_wall_force_[k] = walls[k].second;
   }
+  target_dt_ = sel.first;
+  for (auto& b : bodies_) {
+    const auto f = sel.second.find(b.id);
+    set_selective_factor(b, f == sel.second.end() ? 1.0 : f->second);
+  }
+}
+
+std::pair<double, std::map<GrainId, double>> LsdemEngine::read_selective(StateReader& rd, const nlohmann::json& j) const {
+  std::pair<double, std::map<GrainId, double>> out{target_dt_, {}};
+  const bool on = s_.selective_dt > 0 || s_.selective_dt_fraction > 0;
+  rd.at = "selective_scaling";
+  if (!on) {
+    if (j.contains("selective_scaling")) rd.fail("written with selective mass scaling, which this scenario does not use");
+    return out;
+  }
+  const nlohmann::json& st = rd.field(j, "selective_scaling");
+  out.first = rd.num(rd.field(st, "target_dt"));
+  if (out.first < 0) rd.fail("target_dt: expected >= 0");
+  const nlohmann::json& f = rd.field(st, "factors");
+  if (!f.is_array()) rd.fail("factors: expected an array of [grain id, factor]");
+  for (const auto& e : f) {
+    if (!e.is_array() || e.size() != 2) rd.fail("factors: expected [grain id, factor]");
+    const GrainId id = rd.integer(e[0]);
+    const double s = rd.num(e[1]);
+    if (!index_.count(id) || !(s >= 1) || !out.second.emplace(id, s).second)
+      rd.fail("factors: grain " + std::to_string(id) + " is not in the checkpoint, listed twice, or has a factor below 1");
+  }
+  return out;
 }
 
 // ---- Factory and benchmark ----
@@ -1198,6 +1321,10 @@ const OptionTable& lsdem_options() {
         opt::choice("contact_law", &S::contact_law, {"linear", "hertz"},
                     "normal force k_n·δ (\"linear\") or Hertzian (4/3)·E*·√R*·δ^(3/2) (\"hertz\", 3D only)"),
         opt::positive("kn", &S::kn, "N/m", "grain–grain normal stiffness (Harmon et al. 2020 Table 2); 2D: per metre of thickness"),
+        opt::number("kn_reference_radius", &S::kn_reference_radius, 0, inf, "m",
+                    "linear law: a contact's normal stiffness is kn (wall_kn) × R/this, R the smaller equivalent "
+                    "radius of the pair (a wall contact: the grain's), so a fragment's own step falls with R rather "
+                    "than R^1.5; 0 = kn for every contact"),
         opt::number("ks_ratio", &S::ks_ratio, 0, 10, "", "k_s / k_n (Harmon et al. 2020 Table 2)"),
         opt::number("wall_kn", &S::wall_kn, 0, inf, "N/m", "grain–wall normal stiffness; 0 = kn"),
         opt::number("damping_ratio", &S::damping_ratio, 0, 10, "", "contact critical-damping ratio ζ (Harmon et al. 2020 Table 2)"),
@@ -1206,6 +1333,12 @@ const OptionTable& lsdem_options() {
         opt::number("hertz_reference_overlap", &S::hertz_reference_overlap, 1e-9, 0.5, "",
                     "overlap / smallest equivalent radius at which the Hertz stiffness sets the stable step"),
         opt::positive("mass_scale", &S::mass_scale, "", "mass and inertia ×; weight unchanged (mass scaling)"),
+        opt::number("selective_dt", &S::selective_dt, 0, inf, "s",
+                    "selective mass scaling: a grain whose own stable step dt_safety·√(m/k) is below this gets "
+                    "its mass and inertia × (this / own step)², weight unchanged; 0 = off"),
+        opt::number("selective_dt_fraction", &S::selective_dt_fraction, 0, 1, "",
+                    "selective mass scaling with the target step = this × the stable step of the packing first "
+                    "stepped (the initial packing); 0 = off; not with selective_dt"),
         opt::number("pair_list_skin", &S::pair_list_skin, 0, 10, "",
                     "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
                     "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "
@@ -1222,6 +1355,11 @@ std::unique_ptr<Engine> make_lsdem_engine(const Config& cfg, const EngineContext
   s.threads = std::max(1, ctx.threads);
   if (s.contact_law == "hertz" && ctx.dimension == 2)
     cfg.fail("contact_law", "\"hertz\" is 3D only (2D contacts of cylinders are not Hertzian); use \"linear\"");
+  if (s.kn_reference_radius > 0 && s.contact_law == "hertz")
+    cfg.fail("kn_reference_radius", "is for the linear contact law (the hertz law's stiffness already follows √R*)");
+  if (s.selective_dt > 0 && s.selective_dt_fraction > 0)
+    cfg.fail("selective_dt_fraction", "give selective_dt (an absolute target step) or "
+                                           "selective_dt_fraction, not both");
   return std::make_unique<LsdemEngine>(s, ctx);
 }
 

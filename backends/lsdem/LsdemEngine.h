@@ -32,6 +32,25 @@
 // leaves room for several simultaneous contacts and keeps the energy error of an undamped
 // impact (force onset between steps, deepest node changing) below 1 %.
 //
+// Selective mass scaling (off by default; selective_dt or selective_dt_fraction):
+// a grain whose own stable step dt_safety·√(m/k_max) is below a target step gets its mass
+// and its inertia tensor multiplied by s = (target / own step)² (so its own step equals the
+// target, and its radius of gyration is kept); grains at or above the target are untouched.
+// The target is selective_dt (s), or selective_dt_fraction × the stable step of
+// the packing the engine first steps (the initial packing: with a fraction ≤ 1 none of its
+// grains is scaled; the fragments born later are). The factor is fixed when the grain is
+// added. Weight uses the true mass (gravity never sees the added mass), and so do the
+// Simulation's mass budget and the platen's mass rule. The added mass (s − 1)·m per grain is
+// reported (summary_figures: added mass in kg and as a fraction of the grains' true mass, the
+// largest factor, the grains scaled), and its kinetic energy (added_kinetic_energy) is added
+// to the grains' kinetic energy that the energy guard bounds (core/Guards.h).
+//
+// Size-following stiffness (kn_reference_radius > 0, linear law only): a contact's normal
+// stiffness is kn·R/R_ref (grain–wall: wall_kn·R/R_ref), R the smaller equivalent radius of
+// the pair, as a Hertz-like contact's stiffness grows with its radius. A grain's contacts are
+// then at most k·R_i/R_ref stiff, so its own step is dt_safety·√(m_i·R_ref/(k·R_i)) ∝ R_i (3D)
+// instead of R_i^1.5, and max_stable_dt() is the smallest of them. Off (0) by default.
+//
 // Contact search: bounding spheres hashed into a uniform grid of cells build a Verlet list
 // of the pairs within a skin (pair_list_skin, 0.2 × the largest bounding radius), rebuilt only when two
 // grains may together have moved farther than the skin (broad phase); per
@@ -64,6 +83,7 @@ namespace crumble {
 struct LsdemSettings {
   std::string contact_law = "linear";  // "linear" | "hertz" (hertz: 3D only)
   double kn = 4e7;                      // N/m, grain–grain normal stiffness (Harmon et al. 2020 Table 2)
+  double kn_reference_radius = 0;       // m: kn × R_min / this per contact (linear law); 0 = kn everywhere
   double ks_ratio = 0.6;                // k_s / k_n (Harmon et al. 2020 Table 2)
   double wall_kn = 0;                   // N/m, grain–wall; 0 = kn
   double damping_ratio = 0.4;           // normal critical-damping ratio ζ (Harmon et al. 2020 Table 1 C_res)
@@ -71,6 +91,8 @@ struct LsdemSettings {
   double dt_safety = 0.1;               // fraction of √(m_min/k_max)
   double hertz_reference_overlap = 0.01;  // δ_ref / smallest equivalent radius (hertz step estimate)
   double mass_scale = 1;                // density scaling: mass and inertia ×, weight unchanged
+  double selective_dt = 0;           // s: target step of selective mass scaling; 0 = off
+  double selective_dt_fraction = 0;  // target = this × the initial packing's stable step; 0 = off
   double pair_list_skin = 0.2;          // Verlet skin / largest bounding radius (0: list rebuilt every step)
   int threads = 1;
 };
@@ -173,6 +195,12 @@ class LsdemEngine final : public Engine {
   double kinetic_energy() const;
   // The normal springs' energy at the last force evaluation (Engine::elastic_energy).
   double elastic_energy() const override { return elastic_energy_; }
+  // Selective mass scaling: the target step (s; 0 = off or not yet known), the figures for
+  // summary.json, and the kinetic energy (J; 2D: J/m) of the added mass at the grains'
+  // true masses: Σ ½(s − 1)·(m·v² + ω·I·ω).
+  double selective_target_dt() const { return target_dt_; }
+  std::map<std::string, double> summary_figures() const override;
+  double added_kinetic_energy() const override;
 
   struct ShapeData;
   struct Body;
@@ -216,6 +244,17 @@ class LsdemEngine final : public Engine {
   void reduce_forces(const std::vector<WallPlane>& walls, std::size_t npairs);
   bool apply_contact(const Item& item, const std::vector<WallPlane>& walls);
   void integrate(double dt);
+  // Selective mass scaling: the largest normal stiffness the stable step uses; the step of
+  // the current grains at their unscaled masses; the mass and inertia of b for the target
+  // (factor 1 below it, or when off); the target fixed at the first step (fraction mode).
+  double stiffness_bound() const;
+  double unscaled_stable_dt() const;
+  double stable_dt(bool unscaled) const;
+  void apply_selective_scaling(Body& b) const;
+  void set_selective_factor(Body& b, double sel) const;
+  // restore_state's reader of the target step and the factors (by grain id).
+  std::pair<double, std::map<GrainId, double>> read_selective(StateReader& reader, const nlohmann::json& state) const;
+  void fix_selective_target();
   std::vector<Wall> walls() const;
   int up() const { return ctx_.dimension == 3 ? 2 : 1; }
 
@@ -262,6 +301,7 @@ class LsdemEngine final : public Engine {
   std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
   double relax_damping_ = 0;   // 1/s, added to global_damping while a packing relaxes
+  double target_dt_ = 0;       // s: selective mass scaling's target step (0: off or not yet fixed)
   LsdemStats stats_;
 };
 

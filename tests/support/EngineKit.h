@@ -28,6 +28,14 @@ inline Grain grain(GrainId id, Shape::Ptr s, Vec3 pos, Quat q = {}) {
   return g;
 }
 
+// A level-set sphere of grid spacing h with `nodes` surface nodes.
+inline Shape::Ptr level_set_sphere(double r, double h, int nodes) {
+  ShapeResolution res;
+  res.level_set_spacing = h;
+  res.surface_nodes = nodes;
+  return Shape::sphere(r, res);
+}
+
 inline double mass_of(const Shape::Ptr& s) { return kDensity * s->volume(); }
 
 inline void run(Engine& e, int steps, double dt = kDt) {

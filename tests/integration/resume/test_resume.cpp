@@ -155,57 +155,9 @@ void expect_same_files_but_wall_times(const fs::path& whole, const fs::path& kil
 
 }  // namespace
 
-// lsdem saves its contact history, half-step velocities and platen motion in the checkpoint
-// (Engine::save_state), and the checkpoint saves the shapes' mass properties as they were:
-// a run killed with SIGKILL at a (seeded) random step after its first checkpoint and resumed
-// writes every file as the uninterrupted run does, byte for byte, but for wall times. The
-// final checkpoint.json (grains with their Weibull strengths, lineage, poses, and the engine
-// state) is compared too, so the stress model's per-grain state is restored as it was.
-TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
-  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / "bit_identical";
-  const fs::path whole = base / "whole", killed = base / "killed";
-  fs::remove_all(base);
-  fs::create_directories(base);
-  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
-  // Crushable (stress model, von Mises, weak grains, level-set fragments); first breakage
-  // at step 2150 of 2802; checkpoints every 500 steps and no wall-time checkpoint, so the
-  // resume point is known.
-  // The skip rule is on (Screening.h): each grain's memory of its last intact analysis is in
-  // the checkpoint, or the resumed run would analyse grains the whole run skipped.
-  const std::string sets =
-      " --quiet --threads 1 --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
-      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0"
-      " --set screening.skip_intact_tolerance=0.1";
-  const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
-  ASSERT_EQ(a.status, 0) << a.output;
-  const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
-  const long steps = sa["steps"].get<long>();
-  ASSERT_GT(sa["breakage_events"].get<long>(), 0);
-  ASSERT_GT(sa["analyses_skipped"].get<long>(), 0);
-  ASSERT_GT(steps, 1200);
-  // Kill somewhere after the first checkpoint (step 500) and before the end.
-  std::mt19937 rng(20261130);
-  const long kill_step = std::uniform_int_distribution<long>(600, steps - 150)(rng);
-  const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + killed.string() + sets;
-  run_and_kill(cmd, killed, kill_step);
-  ASSERT_TRUE(fs::exists(killed / "checkpoint.json")) << "kill step " << kill_step;
-  ASSERT_FALSE(fs::exists(killed / "summary.json")) << "the run ended before it was killed (kill step " << kill_step << ")";
-  // A killed run leaves its rows in .part files, possibly past the checkpoint.
-  EXPECT_TRUE(fs::exists(killed / "series.csv.part"));
-  EXPECT_TRUE(fs::exists(killed / "events.csv.part"));
-  const auto b = run_cli("run " + scen + " --out " + killed.string() + sets + " --resume");
-  ASSERT_EQ(b.status, 0) << b.output;
-  const auto sb = nlohmann::json::parse(slurp(killed / "summary.json"));
-  EXPECT_EQ(sb["resumed_from_step"].get<long>() % 500, 0);
-  EXPECT_GE(sb["resumed_from_step"].get<long>(), 500);
-  EXPECT_LE(sb["resumed_from_step"].get<long>(), kill_step + 500);
-  // The screening tally goes on from the checkpoint's (Simulation::saved_state).
-  ASSERT_GT(sa["screening_selected"].get<double>(), 0);
-  for (const char* k : {"screening_too_small", "screening_few_contacts", "screening_below_threshold",
-                        "screening_unbalanced_force", "screening_unbalanced_moment", "screening_selected"})
-    EXPECT_EQ(sa[k], sb[k]) << k;
-
-  expect_same_files_but_wall_times(whole, killed, kill_step);
+// stages.csv of a killed and resumed run against the uninterrupted one's.
+static void expect_same_stages(const fs::path& whole, const fs::path& killed, const nlohmann::json& sa,
+                               const nlohmann::json& sb, long kill_step) {
   // stages.csv: the same stages, steps, grains and analysis counts; wall times are the process's.
   const std::set<std::string> wall_columns{"resumed", "wall_s", "wall_total_s", "engine_s", "engine_ms_per_step",
                                            "analysis_s", "mean_analysis_ms", "breaking_share_of_analysis_time",
@@ -242,13 +194,10 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     }
     if (!seen) std::cerr << "(the resume fell on a stage boundary: no stage to check)\n";
   }
-  // summary.json: equal but for wall times, the resume marker and the representation counts
-  // (a cost of the process: a resumed run counts what it rebuilt from the checkpoint).
-  nlohmann::json ja = sa, jb = sb;
-  for (auto* j : {&ja, &jb})
-    for (const char* k : {"wall_seconds", "time_breakdown_s", "resumed_from_step", "representations_built"}) j->erase(k);
-  EXPECT_EQ(ja.dump(1), jb.dump(1));
-  // The checkpoint holds the engine state and every grain's strength values.
+}
+
+// The checkpoint holds the engine state and every grain's strength values.
+static void expect_engine_state_and_strengths(const fs::path& killed) {
   const auto cp = nlohmann::json::parse(slurp(killed / "checkpoint.json"));
   ASSERT_TRUE(cp.contains("engine_state"));
   EXPECT_EQ(cp["engine_state"]["engine"], "lsdem");
@@ -259,6 +208,89 @@ TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
     remembered += g.contains("intact_load");
   }
   EXPECT_GT(remembered, 0);
+}
+
+// lsdem saves its contact history, half-step velocities and platen motion in the checkpoint
+// (Engine::save_state), and the checkpoint saves the shapes' mass properties as they were:
+// a run killed with SIGKILL at a (seeded) random step after its first checkpoint and resumed
+// writes every file as the uninterrupted run does, byte for byte, but for wall times. The
+// final checkpoint.json (grains with their Weibull strengths, lineage, poses, and the engine
+// state) is compared too, so the stress model's per-grain state is restored as it was.
+// (The body is shared with LsdemSelectiveScalingResumedAfterSigkillIsBitIdentical: `extra`
+// adds settings, `name` the folder; the uninterrupted run's summary is returned in `whole_summary`.)
+static void lsdem_kill_and_resume(const std::string& name, const std::string& extra, nlohmann::json& whole_summary) {
+  const fs::path base = fs::temp_directory_path() / "crumble_resume_test" / name;
+  const fs::path whole = base / "whole", killed = base / "killed";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string scen = std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json";
+  // Crushable (stress model, von Mises, weak grains, level-set fragments); first breakage
+  // at step 2150 of 2802; checkpoints every 500 steps and no wall-time checkpoint, so the
+  // resume point is known.
+  // The skip rule is on (Screening.h): each grain's memory of its last intact analysis is in
+  // the checkpoint, or the resumed run would analyse grains the whole run skipped.
+  const std::string sets =
+      " --quiet --threads 1 --set breakage.type=stress --set breakage.criterion=von_mises --set breakage.strength=3e6"
+      " --set schedule.every_steps=50 --set output.checkpoint_every=500 --set output.checkpoint_every_s=0"
+      " --set screening.skip_intact_tolerance=0.1" + extra;
+  const auto a = run_cli("run " + scen + " --out " + whole.string() + sets);
+  ASSERT_EQ(a.status, 0) << a.output;
+  const auto sa = nlohmann::json::parse(slurp(whole / "summary.json"));
+  whole_summary = sa;
+  const long steps = sa["steps"].get<long>();
+  ASSERT_GT(sa["breakage_events"].get<long>(), 0);
+  ASSERT_GT(sa["analyses_skipped"].get<long>(), 0);
+  ASSERT_GT(steps, 1200);
+  // Kill somewhere after the first checkpoint (step 500) and before the end.
+  std::mt19937 rng(20261130);
+  const long kill_step = std::uniform_int_distribution<long>(600, steps - 150)(rng);
+  const std::string cmd = std::string(CRUMBLE_BINARY) + " run " + scen + " --out " + killed.string() + sets;
+  run_and_kill(cmd, killed, kill_step);
+  ASSERT_TRUE(fs::exists(killed / "checkpoint.json")) << "kill step " << kill_step;
+  ASSERT_FALSE(fs::exists(killed / "summary.json")) << "the run ended before it was killed (kill step " << kill_step << ")";
+  // A killed run leaves its rows in .part files, possibly past the checkpoint.
+  EXPECT_TRUE(fs::exists(killed / "series.csv.part"));
+  EXPECT_TRUE(fs::exists(killed / "events.csv.part"));
+  const auto b = run_cli("run " + scen + " --out " + killed.string() + sets + " --resume");
+  ASSERT_EQ(b.status, 0) << b.output;
+  const auto sb = nlohmann::json::parse(slurp(killed / "summary.json"));
+  EXPECT_EQ(sb["resumed_from_step"].get<long>() % 500, 0);
+  EXPECT_GE(sb["resumed_from_step"].get<long>(), 500);
+  EXPECT_LE(sb["resumed_from_step"].get<long>(), kill_step + 500);
+  // The screening tally goes on from the checkpoint's (Simulation::saved_state).
+  ASSERT_GT(sa["screening_selected"].get<double>(), 0);
+  for (const char* k : {"screening_too_small", "screening_few_contacts", "screening_below_threshold",
+                        "screening_unbalanced_force", "screening_unbalanced_moment", "screening_selected"})
+    EXPECT_EQ(sa[k], sb[k]) << k;
+
+  expect_same_files_but_wall_times(whole, killed, kill_step);
+  expect_same_stages(whole, killed, sa, sb, kill_step);
+  // summary.json: equal but for wall times, the resume marker and the representation counts
+  // (a cost of the process: a resumed run counts what it rebuilt from the checkpoint).
+  nlohmann::json ja = sa, jb = sb;
+  for (auto* j : {&ja, &jb})
+    for (const char* k : {"wall_seconds", "time_breakdown_s", "resumed_from_step", "representations_built"}) j->erase(k);
+  EXPECT_EQ(ja.dump(1), jb.dump(1));
+  expect_engine_state_and_strengths(killed);
+}
+
+TEST(Resume, LsdemRunResumedAfterSigkillIsBitIdentical) {
+  nlohmann::json sa;
+  lsdem_kill_and_resume("bit_identical", "", sa);
+}
+
+// Selective mass scaling (engine.selective_dt_fraction 1: every fragment below the
+// initial packing's stable step is scaled up to it): the target and the factors are in the
+// checkpoint's engine state, and the killed and resumed run is the uninterrupted one byte
+// for byte, its added mass (summary.json) included.
+TEST(Resume, LsdemSelectiveScalingResumedAfterSigkillIsBitIdentical) {
+  nlohmann::json sa;
+  lsdem_kill_and_resume("selective_scaling", " --set engine.selective_dt_fraction=1", sa);
+  if (HasFatalFailure()) return;
+  ASSERT_TRUE(sa.contains("engine_selective_scaling_grains_scaled")) << sa.dump(1);
+  EXPECT_GT(sa["engine_selective_scaling_grains_scaled"].get<double>(), 0);
+  EXPECT_GT(sa["engine_selective_scaling_added_mass_kg"].get<double>(), 0);
+  EXPECT_GT(sa["engine_selective_scaling_max_factor"].get<double>(), 1);
 }
 
 // Bullet keeps state a checkpoint does not hold (persistent manifolds, solver warm starts, the

@@ -170,3 +170,20 @@ TEST(Guards, AStressRampEndsWithItsStressCarried) {
   off.enabled = false;
   EXPECT_EQ(failure_of([&] { check_stress_carried(off, at, 1e9); }), "");
 }
+
+// The kinetic energy of mass an engine added for its stable step (GuardContext::
+// added_kinetic_energy) counts against the budget: a state within it at the true masses
+// fails once the added mass's energy is counted, and the message says how much was added.
+TEST(Guards, AddedMassKineticEnergyCountsAgainstTheBudget) {
+  std::vector<Grain> gs{sphere_at(0, {0.005, 0.005, 0.002})};
+  gs[0].velocity = {0.1, 0, 0};
+  const double ke = kinetic_energy(gs, kMat, 3);
+  GuardContext at = ctx(ke / 5);  // limit 10 × budget = 2 ke
+  EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, at, box(), 3, 0.01, gs, kMat, {}); }), "");
+  at.added_kinetic_energy = 3 * ke;  // a grain scaled ×4: 4 ke in all
+  const std::string msg = failure_of([&] { check_invariants(GuardSettings{}, at, box(), 3, 0.01, gs, kMat, {}); });
+  EXPECT_NE(msg.find("mass added for the stable step"), std::string::npos) << msg;
+  at.added_kinetic_energy = 0.5 * ke;
+  const GuardReading r = check_invariants(GuardSettings{}, at, box(), 3, 0.01, gs, kMat, {});
+  EXPECT_NEAR(r.energy_ratio, 1.5 * ke / (ke / 5), 1e-12);
+}

@@ -172,3 +172,25 @@ TEST(Pareto, FrontByHand) {
   EXPECT_EQ(crumble::pareto_front({0.5, 1}, {nan, 0.3}), (std::vector<bool>{false, true}));
   EXPECT_TRUE(crumble::pareto_front({}, {}).empty());
 }
+
+// breakage_events_at_stress_<Pa>: the breakage rows (children or removed fines; intact
+// analyses do not count) before the first row at or above the level, for a level the run
+// reached (its void ratio is in summary.json); nothing for a level it did not reach.
+TEST(Metrics, BreakageEventsBeforeAReportedLevel) {
+  RunOutputs r = run_with({{crumble::void_ratio_stress_key(5e6), 0.55}, {crumble::void_ratio_stress_key(1e7), 0.45}});
+  // Rows at a platen stress with a number of children and a removed volume.
+  auto row = [](const char* stress, const char* children, const char* removed) {
+    return std::vector<std::string>{"0", "0", stress, "0", "0.002", "0", "70", "split", "1", children, "", "", removed, "hull"};
+  };
+  r.events = {kEventsHeader,      row("2.3e6", "0", "0"),     row("4.1e6", "2", "0"), row("4.9e6", "0", "1e-12"),
+              row("5.0e6", "2", "0"), row("4.8e6", "2", "0"), row("9.9e6", "2", "0")};
+  const auto m5 = find_metric("breakage_events_at_stress_5e6", "test");
+  EXPECT_EQ(m5.unit, "1");
+  ASSERT_TRUE(m5.value(r, m5.name).has_value());
+  EXPECT_EQ(*m5.value(r, m5.name), 2);  // the row at 5.0e6 and all after it are past the level
+  const auto m10 = find_metric("breakage_events_at_stress_1e7", "test");
+  EXPECT_EQ(*m10.value(r, m10.name), 5);
+  const auto m8 = find_metric("breakage_events_at_stress_8e6", "test");  // not reported
+  EXPECT_FALSE(m8.value(r, m8.name).has_value());
+  EXPECT_THROW(find_metric("breakage_events_at_stress_x", "test"), std::exception);
+}
