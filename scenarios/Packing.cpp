@@ -42,6 +42,9 @@ std::vector<double> sample_psd(const std::vector<PsdPoint>& psd, std::size_t cou
 
 namespace {
 
+// The container's cross-section the platen pushes on: m² in 3D, m (per metre of thickness) in 2D.
+double platen_area(const Container& c, int dim) { return dim == 2 ? c.lx : c.lx * c.ly; }
+
 Quat random_orientation(Rng& rng, int dim) {
   if (dim == 2) return Quat::from_axis_angle({0, 0, 1}, rng.uniform(0, 2 * kPi));
   // Shoemake's uniform random rotation.
@@ -215,7 +218,7 @@ void cloud_packing(const Config& pc, const PackingSettings& ps, bool height_give
     vs += sh->volume();
     rmax = std::max(rmax, sh->bounding_radius() * 1.01);
   }
-  const double area = dim == 3 ? spec.container.lx * spec.container.ly : spec.container.lx;
+  const double area = platen_area(spec.container, dim);
   // A cloud at fill_fraction; never lower than the largest grain (a few grains in a wide
   // box would otherwise get a cloud thinner than one of them).
   const double cloud_h = std::max(vs / (ps.fill_fraction * area), 2 * rmax * 1.001);
@@ -348,7 +351,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   // Zhu & Zhao 2019 §5: push the cloud down with a plate under a small force until stable.
   Engine& e = sim.engine();
   const auto& ss = spec.settle_settings;
-  const double area = sim.context().dimension == 2 ? spec.container.lx : spec.container.lx * spec.container.ly;
+  const double area = platen_area(spec.container, sim.context().dimension);
   SettleProgress p = ctl.from ? *ctl.from : settle_start(sim, ss);
   const long window = std::max(1L, std::lround(ss.window / p.dt));
   const long max_steps = std::max(window, std::lround(ss.max_time / p.dt));
@@ -427,7 +430,7 @@ Json relaxation_report(const Simulation& sim, const PackingSpec& spec, const Set
   }
   const RunState s = sim.state();
   const Container& c = spec.container;
-  const double area = sim.context().dimension == 2 ? c.lx : c.lx * c.ly;
+  const double area = platen_area(c, sim.context().dimension);
   return Json{{"built_by", spec.built_by},
               {"steps", r.steps},
               {"converged", r.converged},
