@@ -85,16 +85,29 @@ class FieldText {
   std::vector<Last> last_;
 };
 
-// The values of field f, one entry (its components) a line.
+// The values of field f, one entry (its components) a line. A cell field repeats a grain's
+// entry over all its cells: an entry bitwise equal to the one before copies that line's text.
 std::string values_text(const VtpPiece::Field& f, const char* where) {
   std::string os;
+  os.reserve(12 * f.values.size());
   FieldText text(f);
-  for (std::size_t i = 0; i < f.values.size(); ++i) {
-    if (!std::isfinite(f.values[i]))
-      throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
-                               f.name + "'");
-    text.append(os, i);
-    os += (i + 1) % f.components == 0 ? '\n' : ' ';
+  const std::size_t c = static_cast<std::size_t>(f.components);
+  std::size_t line = 0, line_size = 0;  // the last line's start in os and its length
+  for (std::size_t e = 0; e * c < f.values.size(); ++e) {
+    const double* v = f.values.data() + e * c;
+    if (e > 0 && std::memcmp(v, v - c, c * sizeof(double)) == 0) {
+      os.append(os, line, line_size);
+      continue;
+    }
+    line = os.size();
+    for (std::size_t k = 0; k < c; ++k) {
+      if (!std::isfinite(v[k]))
+        throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
+                                 f.name + "'");
+      text.append(os, e * c + k);
+      os += k + 1 == c ? '\n' : ' ';
+    }
+    line_size = os.size() - line;
   }
   return os;
 }
@@ -267,7 +280,9 @@ void push3(std::vector<double>& v, const Vec3& x) { v.insert(v.end(), {x.x, x.y,
 
 }  // namespace
 
-VtkWriter::VtkWriter(const std::string& dir, Settings settings, long resume_step) : dir_(dir), set_(settings) {
+VtkWriter::VtkWriter(const std::string& dir, Settings settings, long resume_step,
+                     std::shared_ptr<ShapeMetricsCache> metrics)
+    : dir_(dir), set_(settings), metrics_(metrics ? std::move(metrics) : std::make_shared<ShapeMetricsCache>()) {
   fs::create_directories(dir_ + "/vtk");
   if (resume_step < 0) return;
   // Keep the earlier snapshots up to the resume step (file names carry the step).
@@ -292,11 +307,28 @@ void VtkWriter::write_collections() {
 }
 
 void VtkWriter::on_start(const Simulation& sim, const RunState& s) {
-  if ((set_.every > 0 || set_.final_state) && s.step != last_) snapshot(sim, s);
+  // A resumed run counts the loading's parts from its checkpoint.
+  if (s.step == last_) last_frame_ = frame_of(sim, s);
+  else if (set_.every > 0 || set_.final_state) snapshot(sim, s);
 }
 
 void VtkWriter::on_sample(const Simulation& sim, const RunState& s) {
-  if (set_.every > 0 && (last_ < 0 || s.step - last_ >= set_.every)) snapshot(sim, s);
+  if (due(sim, s)) snapshot(sim, s);
+}
+
+// The 1/max_frames part of the loading s is in (Loading::progress); -1 while the progress is
+// 0 (not started, or a loading whose end is not known in advance: a stop force only).
+long VtkWriter::frame_of(const Simulation& sim, const RunState& s) const {
+  if (set_.max_frames <= 0) return -1;
+  const double p = sim.loading().progress(s.time, s.platen_stress, s.axial_strain);
+  return p > 0 ? static_cast<long>(std::floor(p * static_cast<double>(set_.max_frames))) : -1;
+}
+
+// every steps since the last snapshot, and (max_frames) a part of the loading not yet shown.
+bool VtkWriter::due(const Simulation& sim, const RunState& s) const {
+  if (set_.every <= 0 || (last_ >= 0 && s.step - last_ < set_.every)) return false;
+  const long f = frame_of(sim, s);
+  return f < 0 || f > last_frame_;
 }
 
 void VtkWriter::on_finish(const Simulation& sim, const RunState& s, RunSummary&) {
@@ -524,6 +556,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   auto& sim = const_cast<Simulation&>(sim_c);
   sim.sync_grains();
   last_ = s.step;
+  last_frame_ = frame_of(sim, s);
   const bool need_contacts = set_.contacts || !sim.model().load_measure_name().empty();
   const std::vector<Contact> contacts = need_contacts ? sim.engine().contacts() : std::vector<Contact>{};
   const auto on = contacts_by_grain(sim.grains(), contacts);
@@ -534,7 +567,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
     write_file_atomic(dir_ + "/vtk/" + name, vtp_text(piece, &text_[block]));
     blocks.push_back({block, name});
   };
-  put("grains", grains_piece(sim, on, metrics_));
+  put("grains", grains_piece(sim, on, *metrics_));
   put("walls", walls_piece(sim, s.time, set_.wall_height));
   if (!sim.container().open) put("platen", platen_piece(sim, s));
   if (set_.contacts) put("contacts", contacts_piece(sim, contacts));

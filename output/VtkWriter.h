@@ -13,6 +13,7 @@
 // No NaN or infinity is ever written: a non-finite value is an error naming the field.
 #pragma once
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,7 @@ namespace crumble {
 // The output options this family reads ("output" object of a scenario).
 struct VtkOutputSettings {
   long vtk_every = 0;         // steps between VTK snapshots (0 = none)
+  long vtk_max_frames = 20;   // most snapshots over the loading (0 = no limit)
   bool vtk_final = true;      // write the final state as VTK
   bool vtk_contacts = false;  // contact-force lines in each VTK snapshot
   bool vtk_analyses = false;  // per-point data of breakage analyses (vtk/analysis_*.vtp)
@@ -38,6 +40,12 @@ OptionTable vtk_output_options_of() {
   return {
       opt::integer("vtk_every", static_cast<long S::*>(&V::vtk_every), 0, std::numeric_limits<long>::max(),
                    "steps between ParaView snapshots (vtk/, grains.pvd, scene.pvd; docs/output.md); 0 = none"),
+      opt::integer("vtk_max_frames", static_cast<long S::*>(&V::vtk_max_frames), 0,
+                   std::numeric_limits<long>::max(),
+                   "the most vtk_every snapshots over the loading: a snapshot also waits until the loading's "
+                   "progress (the ramp's time, the stop strain or stop stress reached) enters its next "
+                   "1/vtk_max_frames, so an engine with a small time step writes about as many as one with a "
+                   "large step (docs/output.md); 0 = no limit"),
       opt::boolean("vtk_final", static_cast<bool S::*>(&V::vtk_final), "a ParaView snapshot of the final state"),
       opt::boolean("vtk_contacts", static_cast<bool S::*>(&V::vtk_contacts),
                    "each snapshot adds vtk/contacts_*.vtp: one line per contact (centroid to centroid, or to the "
@@ -112,24 +120,30 @@ class VtkWriter : public Observer {
     bool contacts = false;    // contact-force lines (output.vtk_contacts)
     double wall_height = 0;   // m, height of the drawn side walls (0: the container's as set);
                               // the scenario's, so a resumed run draws the same walls
+    long max_frames = 0;      // most snapshots over the loading's progress (0 = no limit)
   };
-  // resume_step >= 0: keep the snapshots of the earlier run up to that step.
-  VtkWriter(const std::string& dir, Settings settings, long resume_step = -1);
+  // resume_step >= 0: keep the snapshots of the earlier run up to that step. metrics: the
+  // shape descriptors' cache, shared with the run's ShapeWriter (null: one of its own).
+  VtkWriter(const std::string& dir, Settings settings, long resume_step = -1,
+            std::shared_ptr<ShapeMetricsCache> metrics = nullptr);
   void on_start(const Simulation& sim, const RunState& s) override;
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation& sim, const RunState& s, RunSummary&) override;
 
  private:
   void snapshot(const Simulation& sim, const RunState& s);
+  bool due(const Simulation& sim, const RunState& s) const;
+  long frame_of(const Simulation& sim, const RunState& s) const;
   void add_to_collections(double time, long step);
   void write_collections();
   std::string dir_;
   Settings set_;
   long last_ = -1;
+  long last_frame_ = -1;  // the loading's 1/max_frames part of the last snapshot
   PvdCollection grains_pvd_, scene_pvd_;  // every snapshot
   bool collections_written_ = false;      // the .pvd files hold every snapshot so far
   std::map<std::string, VtpTextCache> text_;  // by block (grains, walls, ...)
-  ShapeMetricsCache metrics_;             // the grains' shape descriptors, once per shape
+  std::shared_ptr<ShapeMetricsCache> metrics_;  // the grains' shape descriptors, once per shape
 };
 
 class AnalysisVtkWriter : public Observer {

@@ -422,10 +422,12 @@ GrainShapeMetrics grain_shape_metrics(const Shape& shape) {
   return m;
 }
 
-ShapeWriter::ShapeWriter(const std::string& dir, int dimension, long resume_step)
+ShapeWriter::ShapeWriter(const std::string& dir, int dimension, long resume_step,
+                         std::shared_ptr<ShapeMetricsCache> cache)
     : dim_(dimension),
       csv_(dir + "/shape.csv", csv_header("shape.csv", dimension == 2 ? "2D" : "3D"), resume_step),
-      last_step_(resume_step) {}
+      last_step_(resume_step),
+      cache_(cache ? std::move(cache) : std::make_shared<ShapeMetricsCache>()) {}
 
 const GrainShapeMetrics& ShapeMetricsCache::get(const Shape::Ptr& shape) {
   auto it = now_.find(shape.get());
@@ -447,7 +449,7 @@ void ShapeWriter::on_sample(const Simulation& sim, const RunState& s) {
   double sum[3] = {0, 0, 0};
   long n[3] = {0, 0, 0};
   for (const auto& g : sim.grains()) {
-    const GrainShapeMetrics& m = cache_.get(g.shape);
+    const GrainShapeMetrics& m = cache_->get(g.shape);
     const double v[3] = {dim_ == 2 ? m.circularity : m.sphericity, dim_ == 2 ? m.aspect_ratio : m.elongation,
                          dim_ == 2 ? m.sieve_size : m.flatness};
     for (int k = 0; k < 3; ++k)
@@ -456,7 +458,7 @@ void ShapeWriter::on_sample(const Simulation& sim, const RunState& s) {
         ++n[k];
       }
   }
-  cache_.sweep();
+  cache_->sweep();
   // No grain with a descriptor (none left in the engine): the row is left out, never NaN.
   if (n[0] == 0 || n[1] == 0 || n[2] == 0) return;
   last_means_ = {sum[0] / n[0], sum[1] / n[1], sum[2] / n[2]};

@@ -125,7 +125,8 @@ GrainShapeMetrics grain_shape_metrics(const Shape& shape);
 // grain_shape_metrics computed once per Shape (shared and immutable: a grain that breaks is
 // replaced by fragments with shapes of their own) and kept while a grain still uses it. A
 // sample looks up every grain's shape, then sweep() releases the shapes it did not look up:
-// each sample computes the descriptors of the new shapes only.
+// each sample computes the descriptors of the new shapes only. Several writers may share one
+// cache, each looking up every grain before its sweep.
 class ShapeMetricsCache {
  public:
   const GrainShapeMetrics& get(const Shape::Ptr& shape);
@@ -144,8 +145,10 @@ class ShapeMetricsCache {
 class ShapeWriter : public Observer {
  public:
   std::string name() const override { return "shape"; }
-  // resume_step >= 0: continue the rows of a run resumed at that step.
-  ShapeWriter(const std::string& dir, int dimension, long resume_step = -1);
+  // resume_step >= 0: continue the rows of a run resumed at that step. cache: shared with the
+  // VtkWriter of the run (each descriptor computed once for both); null: a cache of its own.
+  ShapeWriter(const std::string& dir, int dimension, long resume_step = -1,
+              std::shared_ptr<ShapeMetricsCache> cache = nullptr);
   void on_start(const Simulation& sim, const RunState& s) override { on_sample(sim, s); }  // the strain-0 row
   void on_sample(const Simulation& sim, const RunState& s) override;
   void on_finish(const Simulation&, const RunState&, RunSummary& sum) override;
@@ -154,7 +157,7 @@ class ShapeWriter : public Observer {
   int dim_;
   CsvStream csv_;
   long last_step_ = -1;
-  ShapeMetricsCache cache_;
+  std::shared_ptr<ShapeMetricsCache> cache_;
   std::vector<double> last_means_;
 };
 

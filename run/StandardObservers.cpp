@@ -25,12 +25,16 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
       resumed && st.initial_height > 0 ? (st.initial_height - st.platen_position) / st.initial_height : -1.0;
   sim.add_observer(std::make_shared<PsdWriter>(out, sc.output.psd_at_stress, resumed ? st.max_platen_stress : -1.0,
                                                sc.output.psd_at_strain, resume_strain, resumed ? st.step : -1L));
+  // The shape descriptors, computed once per shape for shape.csv and the VTK snapshots.
+  const auto metrics = std::make_shared<ShapeMetricsCache>();
   if (sc.output.shape_metrics)
-    sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1));
+    sim.add_observer(std::make_shared<ShapeWriter>(out, sim.context().dimension, resumed ? st.step : -1, metrics));
   if (sc.output.vtk_every > 0 || sc.output.vtk_final)
     sim.add_observer(std::make_shared<VtkWriter>(
-        out, VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts, sc.packing.container.height},
-        resumed ? st.step : -1));
+        out,
+        VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts,
+                            sc.packing.container.height, sc.output.vtk_max_frames},
+        resumed ? st.step : -1, metrics));
   if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1));
   sim.add_observer(std::make_shared<StagesWriter>(
       out, sim.loading().settings().mode == "strain_rate" ? StagesWriter::Axis::Strain : StagesWriter::Axis::Stress,

@@ -136,3 +136,33 @@ TEST(ParaView, TwoDimensionalStressRunEveryFileReads) {
   // The stress model returns no per-point data: analyses.pvd lists nothing.
   EXPECT_EQ(r.report["analyses"].size(), 0u);
 }
+
+namespace {
+// The grains snapshots a run of the 2D rigid oedometer (lsdem, a 0.02 s stress ramp) writes
+// with a snapshot wanted at every sample and `max_frames` as output.vtk_max_frames.
+long rigid_2d_snapshots(long max_frames) {
+  const fs::path out = fresh("frames_" + std::to_string(max_frames));
+  const auto run = run_cli("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json --out " +
+                           out.string() + " --quiet --threads 1 --set output.vtk_every=1 --set output.vtk_final=false" +
+                           " --set output.plots=false --set output.vtk_max_frames=" + std::to_string(max_frames));
+  EXPECT_EQ(run.status, 0) << run.output;
+  long n = 0;
+  for (const auto& e : fs::directory_iterator(out / "vtk")) n += e.path().filename().string().rfind("grains_", 0) == 0;
+  return n;
+}
+}  // namespace
+
+// output.vtk_max_frames reaches the writer: 4 frames over the ramp give the first state and
+// the first sample in each quarter of it (and its end); 0 gives a snapshot at every sample.
+// A negative count is refused with its JSON path.
+TEST(ParaView, MaxFramesLimitsTheSnapshotsOverTheLoading) {
+  const long all = rigid_2d_snapshots(0), four = rigid_2d_snapshots(4);
+  EXPECT_GE(all, 20);
+  EXPECT_GE(four, 4);
+  EXPECT_LE(four, 6);
+  const fs::path out = fresh("frames_negative");
+  const auto bad = run_cli("run " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/oedometer_rigid_2d_quick.json --out " +
+                           out.string() + " --quiet --set output.vtk_max_frames=-1");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/output/vtk_max_frames"), std::string::npos) << bad.output;
+}

@@ -3,10 +3,12 @@
 // independence of the thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <map>
 #include <stdexcept>
@@ -694,4 +696,109 @@ TEST(SimulationLoop, FailedAnalysisCountsSurviveACheckpoint) {
   const RunSummary sb = b.run();
   EXPECT_EQ(sb.extra.at("analyses_failed_degenerate_shape"), failed);
   EXPECT_EQ(sb.extra.at("analyses_failed"), sa.extra.at("analyses_failed"));
+}
+
+namespace {
+// The names of the grains snapshots in dir/vtk, sorted (the step is in the name).
+std::vector<std::string> grains_snapshots(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir / "vtk")) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("grains_", 0) == 0 && n.size() > 4 && n.compare(n.size() - 4, 4, ".vtp") == 0) names.push_back(n);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string file_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// At every sample, a new VtkWriter (no cached text, no cached shape descriptors) writes the
+// state into its own folder.
+struct FreshWriterEverySample : Observer {
+  explicit FreshWriterEverySample(fs::path d) : dir(std::move(d)) {}
+  void on_sample(const Simulation& sim, const RunState& s) override {
+    VtkWriter fresh(dir.string(), VtkWriter::Settings{1, true, false, 0});
+    fresh.on_start(sim, s);
+  }
+  fs::path dir;
+};
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_simulation_loop" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+}  // namespace
+
+// The writer keeps text and descriptors between snapshots (VtpTextCache, ShapeMetricsCache);
+// after a grain splits, every snapshot it writes is byte for byte the one a writer without
+// any cache writes of the same state: no surface, cell or field of the parent survives.
+TEST(SimulationLoop, CachedVtkSnapshotsEqualAFreshWritersAcrossASplit) {
+  const fs::path cached = fresh_dir("vtk_cached"), fresh = fresh_dir("vtk_fresh");
+  const auto sim = one_grain_squeeze(std::make_unique<BoxesBuilder>());
+  // The descriptors' cache shared with shape.csv's writer, as a run shares it.
+  const auto metrics = std::make_shared<ShapeMetricsCache>();
+  sim->add_observer(std::make_shared<ShapeWriter>(cached.string(), 3, -1, metrics));
+  sim->add_observer(std::make_shared<VtkWriter>(cached.string(), VtkWriter::Settings{1, true, false, 0}, -1, metrics));
+  sim->add_observer(std::make_shared<FreshWriterEverySample>(fresh));
+  const RunSummary sum = sim->run();
+  ASSERT_EQ(sum.breakage_events, 1);
+  ASSERT_EQ(sim->grains().size(), 2u);
+  const auto names = grains_snapshots(fresh);
+  ASSERT_GT(names.size(), 10u);
+  std::size_t one = 0, two = 0;  // snapshots of the sphere, of its two boxes
+  for (const auto& n : names) {
+    const std::string a = file_text(cached / "vtk" / n), b = file_text(fresh / "vtk" / n);
+    ASSERT_FALSE(a.empty()) << n;
+    EXPECT_EQ(a, b) << n;
+    const auto ids = vtp_array(b, "grain");
+    (std::set<double>(ids.begin(), ids.end()).size() == 1 ? one : two) += 1;
+    const std::string walls = "walls" + n.substr(6);
+    EXPECT_EQ(file_text(cached / "vtk" / walls), file_text(fresh / "vtk" / walls)) << walls;
+  }
+  EXPECT_GT(one, 2u);
+  EXPECT_GT(two, 2u);
+  // One shared cache: the descriptors of the sphere and of each box (two shapes), each
+  // computed once for both writers.
+  EXPECT_EQ(metrics->computed(), 3u);
+}
+
+namespace {
+// grains_*.vtp files of the squeeze (strain rate, 1e-3 strain a step) stopped at stop_strain
+// (0: at its stop force only, a loading without progress), a snapshot wanted every step.
+std::size_t squeeze_snapshots(const std::string& name, double stop_strain, long max_frames) {
+  const fs::path dir = fresh_dir(name);
+  SqueezeSetup u = squeeze_setup();
+  if (stop_strain > 0) u.ls.stop_force = 0;
+  u.ls.stop_strain = stop_strain;
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
+                 std::make_unique<EighthBuilder>(), EngineContext{}, u.ss, u.ls, u.sch, u.scr, 123);
+  sim.set_container({0.01, 0.01, 0.01, 0});
+  Grain g;
+  g.shape = Shape::sphere(1e-3);
+  sim.add_grain(g);
+  sim.add_observer(std::make_shared<VtkWriter>(dir.string(), VtkWriter::Settings{1, false, false, 0, max_frames}));
+  const RunSummary sum = sim.run();
+  EXPECT_GT(sum.steps, 25);
+  return grains_snapshots(dir).size();
+}
+}  // namespace
+
+// output.vtk_max_frames: with a snapshot wanted at every step (vtk_every 1), 5 frames over a
+// loading of 30 steps give the start and the first sample in each fifth of the strain (and
+// the end, at 1); without the limit, or without a progress to count (a stop force only),
+// every step.
+TEST(SimulationLoop, VtkMaxFramesLimitsSnapshotsToPartsOfTheLoading) {
+  const std::size_t every = squeeze_snapshots("frames_unlimited", 0.03, 0);
+  const std::size_t five = squeeze_snapshots("frames_five", 0.03, 5);
+  EXPECT_GE(every, 30u);
+  EXPECT_GE(five, 5u);
+  EXPECT_LE(five, 7u);
+  const std::size_t force_only = squeeze_snapshots("frames_force_only", 0, 5);
+  EXPECT_EQ(force_only, squeeze_snapshots("frames_force_only_unlimited", 0, 0));
+  EXPECT_GE(force_only, 30u);
 }
