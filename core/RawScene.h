@@ -19,6 +19,7 @@ struct RawBody {
   Vec3 com;                // world (m)
   Quat orientation;        // body → world
   Vec3 velocity, angular_velocity;
+  double diameter = 0;      // the grain's equivalent diameter (m): its collision margin is a fraction of it
   double friction = 0.5;
   double rolling_friction = 0;
 };

@@ -95,7 +95,7 @@ RawBulletWorld::RawBulletWorld(const RawScene& sc) : dt(sc.dt) {
   for (const RawBody& b : sc.bodies) add_grain(b, sc, f);
 }
 
-// Static planes for the floor and side walls, a static box for the lid.
+// Static planes for the floor and side walls, a kinematic box for the lid.
 void RawBulletWorld::add_container(const RawScene& sc, const BodyFrictions& f) {
   const double s = sc.length_scale;
   auto add_static = [&](btCollisionShape* shape, const btTransform& t) {
@@ -117,17 +117,24 @@ void RawBulletWorld::add_container(const RawScene& sc, const BodyFrictions& f) {
   btTransform lid = btTransform::getIdentity();
   lid.setOrigin(btVector3(0.5 * sc.lx * s, 0.5 * sc.ly * s, sc.platen_z * s + hz));
   add_static(shapes.back().get(), lid);
+  // The lid as a driven platen: a kinematic body (held still here), as the adapter's platen
+  // under a velocity command (measured: no cost against a static lid).
+  btRigidBody* platen = bodies.back().get();
+  world.removeRigidBody(platen);
+  platen->setCollisionFlags(platen->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+  platen->setActivationState(DISABLE_DEACTIVATION);
+  world.addRigidBody(platen);
 }
 
 // A btConvexHullShape in the body's principal frame. Bullet inflates a hull by its margin:
 // inset it by the margin first (Bullet's manual, "collision margin"), margin_fraction of the
-// equivalent diameter.
+// grain's equivalent diameter (for a sphere, the sphere's, not its hull's).
 void RawBulletWorld::add_grain(const RawBody& b, const RawScene& sc, const BodyFrictions& f) {
   const double s = sc.length_scale;
   if (b.hull.vertices.size() < 4 || !(b.mass > 0)) throw std::invalid_argument("raw bullet bench: a body without volume");
   const PrincipalAxes pa = principal_axes(b.inertia);
   const Quat to_principal = pa.rotation.conjugate();
-  const double d = std::cbrt(6 * polyhedron_mass_properties(b.hull).volume / M_PI);
+  const double d = b.diameter;
   const double inradius = convex_inradius_about_centroid(b.hull);
   const double margin = inradius > 0 ? std::min(sc.margin_fraction * d, 0.5 * inradius) : 0;
   const std::vector<Vec3> inset = margin > 0 ? inset_convex_vertices(b.hull, margin) : b.hull.vertices;

@@ -37,7 +37,7 @@ void solver_settings(const btContactSolverInfo& si, std::map<std::string, double
 }
 
 void body_settings(const btDiscreteDynamicsWorld& world, std::map<std::string, double>& out) {
-  Range friction, rolling, spinning, restitution, lin_damping, ang_damping, gravity, margin, flags;
+  Range friction, spinning, restitution, lin_damping, ang_damping, gravity, margin, flags;
   double statics = 0, kinematics = 0, dynamics = 0, sleepless = 0;
   const btCollisionObjectArray& objs = world.getCollisionObjectArray();
   for (int i = 0; i < objs.size(); ++i) {
@@ -53,7 +53,6 @@ void body_settings(const btDiscreteDynamicsWorld& world, std::map<std::string, d
     }
     ++dynamics;
     friction.add(b->getFriction());
-    rolling.add(b->getRollingFriction());
     spinning.add(b->getSpinningFriction());
     restitution.add(b->getRestitution());
     lin_damping.add(b->getLinearDamping());
@@ -68,7 +67,6 @@ void body_settings(const btDiscreteDynamicsWorld& world, std::map<std::string, d
   out["bodies.dynamic"] = dynamics;
   out["bodies.deactivation_disabled"] = sleepless;
   friction.write(out, "bodies.friction");
-  rolling.write(out, "bodies.rolling_friction");
   spinning.write(out, "bodies.spinning_friction");
   restitution.write(out, "bodies.restitution");
   lin_damping.write(out, "bodies.linear_damping");

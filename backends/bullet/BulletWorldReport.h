@@ -11,9 +11,10 @@ class btDiscreteDynamicsWorld;
 namespace crumble {
 
 // Solver settings (iterations, erp, modes, thresholds), the dispatcher's flags and the
-// dynamic bodies' settings (friction, rolling friction, damping, gravity, margin; min and
-// max over the bodies), the number of static, kinematic and dynamic bodies. Not what the
-// user cannot change per world (Bullet's global callbacks are process-wide).
+// dynamic bodies' settings (friction, damping, gravity, margin; min and max over the
+// bodies), the number of static, kinematic and dynamic bodies. Not the bodies' rolling
+// friction: what Bullet solves with is the pair's combined value (a process-wide callback or
+// Bullet's rule), which bullet_contact_work reports.
 std::map<std::string, double> bullet_world_settings(const btDiscreteDynamicsWorld& world);
 
 // The last step's contact work: manifolds, contact points, the contact solver's rows by
