@@ -3,7 +3,9 @@
 // through its library's own API (no crumble adapter in the loop) and step them, so the
 // adapter's per-step cost can be compared with the raw library's on identical bodies.
 #pragma once
+#include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "geometry/TriMesh.h"
@@ -17,6 +19,7 @@ struct RawBody {
   Vec3 com;                // world (m)
   Quat orientation;        // body → world
   Vec3 velocity, angular_velocity;
+  double diameter = 0;      // the grain's equivalent diameter (m): its collision margin is a fraction of it
   double friction = 0.5;
   double rolling_friction = 0;
 };
@@ -45,6 +48,11 @@ class RawWorld {
   // Touching pairs (grain–grain and grain–wall) in the last step: Bullet's manifolds that
   // carried an impulse, ODE's contact points (one per pair at contacts_per_pair = 1).
   virtual int contact_pairs() const = 0;
+  // The world's settings and the last step's contact work under the names the adapter of the
+  // same library reports them (Bullet: backends/bullet/BulletWorldReport.h); empty when the
+  // baseline does not report them.
+  virtual std::map<std::string, double> settings() const { return {}; }
+  virtual std::map<std::string, double> contact_work() const { return {}; }
 };
 
 }  // namespace crumble

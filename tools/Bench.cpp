@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <iomanip>
 #include <sstream>
 
@@ -171,6 +172,7 @@ RawScene raw_scene_of(const Simulation& sim, const Container& box, double dt) {
     b.orientation = q;
     b.velocity = g.velocity;
     b.angular_velocity = g.angular_velocity;
+    b.diameter = g.shape->equivalent_diameter();
     b.friction = m.friction;
     b.rolling_friction = m.rolling_friction;
     r.bodies.push_back(std::move(b));
@@ -206,6 +208,18 @@ Scenario bench_scenario(const std::string& engine, const std::string& file, long
   return sc;
 }
 
+// The grains leave the engine and enter it again where they are, at their velocities: the
+// adapter's world then starts, as the raw world does, without the contact points and impulses
+// of the settling (Bullet's manifolds hold up to 4 points each, gathered one per step while
+// the grains moved; a new world starts with none and a resting packing gathers few). Bullet
+// only: ODE keeps no contacts between steps.
+#if CRUMBLE_WITH_BULLET
+void restart_contacts(Engine& eng, const std::vector<Grain>& grains) {
+  for (const Grain& g : grains) eng.remove_grain(g.id);
+  for (const Grain& g : grains) eng.add_grain(g);
+}
+#endif
+
 // The raw library's world for a bullet or ode adapter (null for lsdem), with the adapter's
 // solver settings and length scale.
 std::unique_ptr<RawWorld> raw_world_for(Engine& eng, const Scenario& sc, RawScene& raw) {
@@ -224,6 +238,7 @@ std::unique_ptr<RawWorld> raw_world_for(Engine& eng, const Scenario& sc, RawScen
     const auto o = BulletEngine::read_options(engine_cfg);
     shared_settings(o, b->length_scale());
     raw.margin_fraction = o.margin_fraction;
+    restart_contacts(eng, sc.sim->grains());
     raw_world = make_raw_bullet_world(raw);
   }
 #endif
@@ -242,7 +257,47 @@ std::unique_ptr<RawWorld> raw_world_for(Engine& eng, const Scenario& sc, RawScen
 // the contacts each counted, over `steps` alternate steps.
 struct StepTimes {
   double step = 0, read = 0, raw = 0, contacts = 0, raw_contacts = 0;
+  std::map<std::string, double> work, raw_work;  // contact work summed over the steps (untimed)
 };
+
+// The contact work of the adapter's last step (Bullet: backends/bullet/BulletWorldReport.h);
+// empty for an engine that does not report it.
+std::map<std::string, double> adapter_contact_work([[maybe_unused]] const Engine& eng) {
+#if CRUMBLE_WITH_BULLET
+  if (auto* b = dynamic_cast<const BulletEngine*>(&eng)) return b->contact_work();
+#endif
+  return {};
+}
+
+std::map<std::string, double> adapter_settings([[maybe_unused]] const Engine& eng) {
+#if CRUMBLE_WITH_BULLET
+  if (auto* b = dynamic_cast<const BulletEngine*>(&eng)) return b->world_settings();
+#endif
+  return {};
+}
+
+void add_to(std::map<std::string, double>& sum, const std::map<std::string, double>& v) {
+  for (const auto& [k, x] : v) sum[k] += x;
+}
+
+Json per_step(const std::map<std::string, double>& sum, long steps) {
+  Json j = Json::object();
+  for (const auto& [k, x] : sum) j[k] = x / static_cast<double>(steps);
+  return j;
+}
+
+// The settings in which the two worlds differ, by name (relative tolerance 1e-9).
+Json settings_differences(const std::map<std::string, double>& a, const std::map<std::string, double>& b) {
+  Json d = Json::array();
+  std::map<std::string, std::pair<double, double>> both;
+  for (const auto& [k, x] : a) both[k] = {x, b.count(k) ? b.at(k) : std::nan("")};
+  for (const auto& [k, x] : b)
+    if (!a.count(k)) both[k] = {std::nan(""), x};
+  for (const auto& [k, v] : both)
+    if (!(std::abs(v.first - v.second) <= 1e-9 * std::max(std::abs(v.first), std::abs(v.second))))
+      d.push_back(k);
+  return d;
+}
 
 StepTimes time_steps(Engine& eng, RawWorld* raw_world, std::vector<Grain>& grains, long steps, double dt) {
   using clock = std::chrono::steady_clock;
@@ -257,11 +312,13 @@ StepTimes time_steps(Engine& eng, RawWorld* raw_world, std::vector<Grain>& grain
     const auto c = clock::now();
     t.step += seconds(a, b);
     t.read += seconds(b, c);
+    add_to(t.work, adapter_contact_work(eng));
     if (raw_world) {
       const auto d = clock::now();
       raw_world->step();
       t.raw += seconds(d, clock::now());
       t.raw_contacts += raw_world->contact_pairs();
+      add_to(t.raw_work, raw_world->contact_work());
     }
   }
   return t;
@@ -294,7 +351,10 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   // load falls on both alike.
   const std::unique_ptr<RawWorld> raw_world = raw_world_for(eng, sc, raw);
   std::vector<Grain> grains = sc.sim->grains();
+  double load[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
+  getloadavg(load, 3);
   const StepTimes t = time_steps(eng, raw_world.get(), grains, steps, dt);
+  getloadavg(load_after, 3);
   Json j;
   j["benchmark"] = "engine";
   j["engine"] = engine;
@@ -305,12 +365,20 @@ Json bench_engine(const std::string& engine, long steps, long settle, int thread
   j["settle"] = settle < 0 ? Json("scenario packing procedure") : Json(settle);
   j["settle_wall_s"] = settle_s;
   j["steps"] = steps;
+  j["load_average_1min"] = {{"before", load[0]}, {"after", load_after[0]}};
   j["adapter"] = {{"ms_per_step", 1e3 * t.step / steps},
                   {"readout_ms_per_step", 1e3 * t.read / steps},
-                  {"contacts_per_step", t.contacts / steps}};
+                  {"contacts_per_step", t.contacts / steps},
+                  {"contact_work_per_step", per_step(t.work, steps)}};
   if (raw_world) {
     const double raw_ms = 1e3 * t.raw / steps;
-    j["raw"] = {{"ms_per_step", raw_ms}, {"contacts_per_step", t.raw_contacts / steps}};
+    j["raw"] = {{"ms_per_step", raw_ms},
+                {"contacts_per_step", t.raw_contacts / steps},
+                {"contact_work_per_step", per_step(t.raw_work, steps)}};
+    // What each world was set up to do, and where the two differ (a like-for-like comparison
+    // has no difference but the ones the bench names: docs/performance.md).
+    const auto a = adapter_settings(eng), r = raw_world->settings();
+    j["settings"] = {{"adapter", a}, {"raw", r}, {"differences", settings_differences(a, r)}};
     j["adapter_overhead"] = t.step / t.raw - 1;
     j["adapter_overhead_with_readout"] = (t.step + t.read) / t.raw - 1;
   } else {

@@ -2,6 +2,7 @@
 // rules of backends/rigid/RigidWorld.h (units: Bullet sees lengths × scale, seconds and
 // kilograms; impulses leave through force_si() and the same factors).
 #include "backends/bullet/BulletEngine.h"
+#include "backends/bullet/BulletWorldReport.h"
 #include "backends/rigid/RigidWorld.h"
 #include "base/Format.h"
 
@@ -737,6 +738,9 @@ Engine::SolverReport BulletEngine::solver_report() const {
 }
 
 int BulletEngine::last_solver_iterations() const { return impl_->solver->max_iterations; }
+
+std::map<std::string, double> BulletEngine::world_settings() const { return bullet_world_settings(*impl_->world); }
+std::map<std::string, double> BulletEngine::contact_work() const { return bullet_contact_work(*impl_->world); }
 
 std::unique_ptr<Engine> make_bullet_engine(const Config& cfg, const EngineContext& ctx) {
   return make_rigid_engine<BulletEngine>(cfg, ctx, "bullet");

@@ -48,7 +48,9 @@
 // velocity (gyroscopic terms are applied only to bodies in contact); the rolling
 // resistance impulse per step is also capped at μr in internal units by the solver.
 #pragma once
+#include <map>
 #include <memory>
+#include <string>
 
 #include "backends/rigid/RigidEngine.h"
 #include "backends/rigid/RigidOptions.h"
@@ -84,6 +86,9 @@ class BulletEngine final : public RigidEngine {
   // Zhu's relative impulse change ε at the last iteration of the last step (largest island).
   double last_solver_change() const;
   int last_solver_iterations() const;      // most PGS iterations an island needed in the last step (-1 before any)
+  // The world's settings and the last step's contact work (backends/bullet/BulletWorldReport.h).
+  std::map<std::string, double> world_settings() const;
+  std::map<std::string, double> contact_work() const;
 
  private:
   struct Impl;
