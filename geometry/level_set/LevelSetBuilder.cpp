@@ -97,7 +97,7 @@ double capped_spacing(double h, const Aabb& box, int dim, long max_nodes) {
 }  // namespace
 
 // The split on the parent's grid, repeated on grids refined by halves while it removes a piece
-// the grid cannot resolve or cannot resolve the cut at all (Harmon et al. 2020 §4.1, second
+// the grid cannot resolve or cannot resolve the cut at all (Harmon et al. 2020 §3.4, second
 // method), down to resolve_diameter / cells_across and the max_grid_nodes cap.
 SplitResult LevelSetBuilder::refined_split(const LevelSetGrid& phi1, const Fracture& fracture, SplitOptions& so,
                                            bool through, FragmentResult& out) const {
@@ -149,10 +149,8 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
   if (sr.missed) {
     // The cut runs through the grain but no grid node lies on one side of it, even on the
     // finest grid allowed: one plane is moved along its normal to leave at least one row of
-    // grid nodes on each side (counted as a fallback). A grain with a single row of nodes along
-    // the normal, or whose moved cut still fails, is of the size of its discretisation: Harmon et
-    // al. 2020 §3.4 remove such grains, so it is crushed — all of it removed volume (no
-    // child; events.csv outcome crushed). A cut that misses the grain stays a no_split.
+    // grid nodes on each side (counted as a fallback). A cut that misses the grain stays a
+    // no_split.
     if (!through) {
       out.method = "no_split";
       return out;
@@ -161,13 +159,17 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
       sr = moved_cut(phi1, cs->planes.front(), so);
       if (!sr.missed && !sr.children.empty()) out.method = "level_set_planes_moved";
     }
-    if (sr.missed || sr.children.empty()) {
-      out.method = "level_set_unresolved";
-      out.removed_volume = V;
-      out.fallbacks = 1;
-      return out;
-    }
-    ++out.fallbacks;
+    if (!sr.missed && !sr.children.empty()) ++out.fallbacks;
+  }
+  if (sr.missed || sr.children.empty()) {
+    // No piece the grid can resolve: a grain with a single row of nodes along the normal, a
+    // moved cut that still fails, or a split whose every piece is thinner than
+    // min_thickness_cells. Such a grain is of the size of its discretisation; of the ways
+    // Harmon et al. 2020 §3.4 name for it, the first is taken: it does not break. No child, no
+    // removed volume, unresolved: the simulation leaves it whole and counts it.
+    out.method = "level_set_unresolved";
+    out.unresolved = true;
+    return out;
   }
   finish_children(parent, sr, out);
   return out;
@@ -220,7 +222,7 @@ const OptionTable& level_set_options() {
                     "a piece smaller than this × the parent's volume is removed (counted)"),
         opt::number("cells_across", &S::cells_across, 0, 1000, "",
                     "grid cells across a child's thickness (twice its deepest inside distance): each child is "
-                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §4.1, second "
+                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §3.4, second "
                     "method; the count is ours; measured in docs/validation.md); 0 = off: children keep the parent's "
                     "lattice and no split is refined"),
         opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",

@@ -23,7 +23,7 @@
 // leaves the grain as it was. With cells_across > 0 a split with absorbed pieces is refined
 // first, like one with removed pieces.
 //
-// Resolution that follows the pieces (Harmon et al. 2020 §4.1 name three ways to treat
+// Resolution that follows the pieces (Harmon et al. 2020 §3.4 name three ways to treat
 // pieces as small as their discretisation: stop breaking them, refine their discretisation,
 // remove them; this is the second). Off by default (measured: docs/validation.md). With
 // cells_across > 0:
@@ -63,9 +63,10 @@ class LevelSetBuilder final : public FragmentBuilder {
   // Thread-safe (const, no shared mutable state). A surface that misses the grain gives
   // no child and method "no_split" (not an error). A plane through the grain that leaves no
   // grid node on one side is moved to leave a row of nodes on each (method
-  // "level_set_planes_moved"); if the grain has a single row of nodes along the normal, or
-  // the moved cut fails too, no child, removed_volume = V_parent and method
-  // "level_set_unresolved" (crushed to fines, Harmon et al. 2020 §3.4).
+  // "level_set_planes_moved"); if the grain has a single row of nodes along the normal, the
+  // moved cut fails too, or every piece is thinner than min_thickness_cells: no child, no
+  // removed volume, FragmentResult::unresolved and method "level_set_unresolved" (the grain
+  // stays whole: Harmon et al. 2020 §3.4, first method).
   // FragmentResult::grid_nodes: the children's grid nodes; refinements: the splits repeated
   // on a finer grid.
   FragmentResult build(const Shape& parent, const Fracture& fracture) const override;

@@ -263,7 +263,7 @@ TEST(LevelSetSplit, PiecesThinnerThanACellNextToAKeptChildAreAbsorbed) {
   EXPECT_NEAR(on.children[0].volume / whole, 1.0, 0.01);
 }
 
-// Harmon et al. 2020 §4.1, second method: the same sub-cell cap is kept when the split may be
+// Harmon et al. 2020 §3.4, second method: the same sub-cell cap is kept when the split may be
 // refined (resolve_diameter): the split is repeated on finer grids until the cap is resolved,
 // and it becomes a child with the circular segment's area; nothing is removed.
 TEST(LevelSetSplit, ThinCapIsKeptWhenTheSplitIsRefined) {
@@ -334,12 +334,13 @@ TEST(LevelSetSplit, ResampledGridKeepsTheZeroLevel) {
   EXPECT_THROW(g->resampled(0.0, 0), std::invalid_argument);
 }
 
-// Harmon et al. 2020 §3.4: a grain of the size of its discretisation is removed. A slab
-// 1.6 cells thick (one row of grid nodes inside) cut along its length: its grid cannot
-// separate two pieces (split_by_planes finds one side empty), yet the plane runs through it.
-// All of it is removed volume (the Simulation records the grain as crushed), the budget
-// exact. The same slab cut across its length splits in two; a plane beyond it misses it.
-TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthIsCrushedToFines) {
+// Harmon et al. 2020 §3.4, first method: a grain of the size of its discretisation does not
+// break. A slab 1.6 cells thick (one row of grid nodes inside) cut along its length: its grid
+// cannot separate two pieces (split_by_planes finds one side empty), yet the plane runs
+// through it. The builder returns no child and no removed volume, marked unresolved (the
+// Simulation leaves the grain whole). The same slab cut across its length splits in two; a
+// plane beyond it misses it.
+TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthStaysWhole) {
   const double a = 10 * kH, b = 0.8 * kH;
   auto box = [&](const Vec3& p) {
     const double qx = std::abs(p.x) - a, qy = std::abs(p.y) - b;
@@ -352,14 +353,32 @@ TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthIsCrushedToFines) {
   ASSERT_TRUE(split_by_planes(slab->level_set(), {{{0, 1, 0}, 0.3 * kH}}).missed);
   const FragmentResult fr = lb.build(*slab, along);
   EXPECT_EQ(fr.method, "level_set_unresolved");
+  EXPECT_TRUE(fr.unresolved);
   EXPECT_TRUE(fr.children.empty());
-  EXPECT_NEAR(fr.removed_volume, slab->volume(), 1e-12 * slab->volume());
-  EXPECT_EQ(fr.fallbacks, 1);
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  EXPECT_EQ(fr.fallbacks, 0);
   const FragmentResult across = lb.build(*slab, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
   EXPECT_EQ(across.children.size(), 2u);
+  EXPECT_FALSE(across.unresolved);
   const FragmentResult miss = lb.build(*slab, CuttingSurfaces{{{{0, 1, 0}, 3 * b}}});
   EXPECT_EQ(miss.method, "no_split");
   EXPECT_EQ(miss.removed_volume, 0.0);
+}
+
+// A split whose every piece is thinner than min_thickness_cells (here 25 cells: a 20-cell
+// disk halved) resolves nothing either: unresolved, no child, no removed volume.
+TEST(LevelSetSplit, SplitWithEveryPieceTooThinIsUnresolved) {
+  const auto disk = Shape::from_level_set(disk_grid());
+  LevelSetBuilderOptions o;
+  o.min_thickness_cells = 25;
+  const FragmentResult fr = LevelSetBuilder(o).build(*disk, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
+  EXPECT_TRUE(fr.unresolved);
+  EXPECT_EQ(fr.method, "level_set_unresolved");
+  EXPECT_TRUE(fr.children.empty());
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  const FragmentResult kept = LevelSetBuilder().build(*disk, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
+  EXPECT_FALSE(kept.unresolved);
+  EXPECT_EQ(kept.children.size(), 2u);
 }
 
 // A slab 3.2 cells thick (grid rows at y = −h, 0, h inside) cut at y = −1.3 h, below its lowest
