@@ -474,21 +474,27 @@ TEST(SimulationLoop, CrushCountFollowsTheLineage) {
   EXPECT_GT(second, 0) << "no grandchild: the test would not see the count carried over";
 }
 
+// The four grains unbroken (generation 0), each with a crush_count equal to its records in
+// `verdicts`; returns their sum.
+static int unsplit_verdicts(const Lineage& r, const std::map<GrainId, int>& verdicts) {
+  EXPECT_EQ(r.grains.size(), 4u);
+  int total = 0;
+  for (const auto& g : r.grains) {
+    EXPECT_EQ(g.generation, 0);
+    const auto it = verdicts.find(g.id);
+    const int expect = it == verdicts.end() ? 0 : it->second;
+    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
+    total += expect;
+  }
+  return total;
+}
+
 // A verdict the builder cannot split (no_split) keeps the grain and still counts: the
 // count is the number of no_split records of that grain.
 TEST(SimulationLoop, CrushCountCountsUnsplitVerdicts) {
   const Lineage r = run_lineage(std::make_unique<WholeBuilder>(), 1000);
   EXPECT_EQ(r.events, 0);
-  ASSERT_EQ(r.grains.size(), 4u);
-  int total = 0;
-  for (const auto& g : r.grains) {
-    EXPECT_EQ(g.generation, 0);
-    const auto it = r.no_split.find(g.id);
-    const int expect = it == r.no_split.end() ? 0 : it->second;
-    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
-    total += g.crush_count;
-  }
-  EXPECT_GE(total, 4) << "every grain is loaded past its limit; each must have been judged broken";
+  EXPECT_GE(unsplit_verdicts(r, r.no_split), 4) << "every grain is loaded past its limit; each must have been judged broken";
 }
 
 // Harmon et al. 2020 §3.4, first method: a verdict the builder cannot turn into a resolved
@@ -500,16 +506,8 @@ TEST(SimulationLoop, UnresolvedSplitLeavesTheGrainWholeAndCounted) {
   EXPECT_EQ(r.sum.mass_removed, 0.0);
   EXPECT_EQ(r.sum.extra.at("mass_removed_crushed_kg"), 0.0);
   EXPECT_NEAR(r.sum.mass_final, r.sum.mass_initial, 1e-12 * r.sum.mass_initial);
-  ASSERT_EQ(r.grains.size(), 4u);
   EXPECT_TRUE(r.no_split.empty());
-  int total = 0;
-  for (const auto& g : r.grains) {
-    EXPECT_EQ(g.generation, 0);
-    const auto it = r.unresolved.find(g.id);
-    const int expect = it == r.unresolved.end() ? 0 : it->second;
-    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
-    total += expect;
-  }
+  const int total = unsplit_verdicts(r, r.unresolved);
   EXPECT_GE(total, 4) << "every grain is loaded past its limit; each must have been judged broken";
   EXPECT_EQ(r.sum.extra.at("fragment_unresolved"), static_cast<double>(total));
 }
