@@ -20,7 +20,8 @@ struct FragmentResult {
   std::string method;     // e.g. "alpha_shape", "convex_hull", "plane_cut"
   int fallbacks = 0;      // documented fallbacks taken (counted in summary.json)
   // Volume of pieces the builder dropped (e.g. level-set pieces thinner than a grid cell):
-  // counted as removed mass (fines), never lost. 0 children and 0 removed = no split.
+  // counted as removed mass (fines), never lost. 0 children and 0 removed = no split
+  // (unresolved below says why).
   double removed_volume = 0;
   // Cost figures of resolution-refining builders (summary.json fragment_grid_nodes_per_child,
   // fragment_refinements): nodes of the children's grids, splits repeated on a finer grid.
@@ -29,6 +30,10 @@ struct FragmentResult {
   // Pieces too small to resolve that the builder gave to a kept child instead of removing
   // (summary.json fragment_pieces_absorbed).
   int absorbed = 0;
+  // The builder could not cut the grain into a piece it can resolve: no child and no removed
+  // volume, and the simulation leaves the grain whole (events.csv outcome unresolved;
+  // summary.json fragment_unresolved).
+  bool unresolved = false;
 };
 
 class FragmentBuilder {

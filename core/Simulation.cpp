@@ -466,6 +466,7 @@ void Simulation::fill_summary(RunSummary& sum, const RunState& st) {
   const FragmentCounts& fc = fragment_counts_;
   sum.extra["fragment_refinements"] = static_cast<double>(fc.refinements);
   sum.extra["fragment_pieces_absorbed"] = static_cast<double>(fc.absorbed);
+  sum.extra["fragment_unresolved"] = static_cast<double>(fc.unresolved);
   sum.extra["fragment_grid_nodes_per_child"] =
       fc.children > 0 ? static_cast<double>(fc.grid_nodes) / static_cast<double>(fc.children) : 0.0;
   long failed = 0;
@@ -659,10 +660,12 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
   // The record says what the builder made of it: "no_split" when the model broke the
   // grain but the builder returned fewer than two pieces (the grain stays as it is),
   // "chip" when one child and removed fines came out.
-  // "crushed" when the builder removed all of it as fines (no child; FragmentBuilder.h).
+  // "crushed" when the builder removed all of it as fines (no child; FragmentBuilder.h),
+  // "unresolved" when the builder could not cut it into a piece it resolves (the grain stays).
   const bool crushed = frag.children.empty() && frag.removed_volume > 0;
   const std::size_t pieces = frag.children.size() + (frag.removed_volume > 0 ? 1 : 0);
-  if (result.broken && crushed) rec.analysis.outcome = "crushed";
+  if (result.broken && frag.unresolved) rec.analysis.outcome = "unresolved";
+  else if (result.broken && crushed) rec.analysis.outcome = "crushed";
   else if (result.broken && pieces < 2) rec.analysis.outcome = "no_split";
   else if (result.broken && frag.children.size() == 1) rec.analysis.outcome = "chip";
   notify([&](Observer& o) { o.on_analysis(*this, rec); });
@@ -677,6 +680,7 @@ bool Simulation::apply_outcome(BreakageBatch& b, long k, const RunState& st, std
   if (pieces < 2 && !crushed) {
     // The model's verdict counts even when the builder could not split the grain (Grain.h).
     ++g.crush_count;
+    if (frag.unresolved) ++fragment_counts_.unresolved;
     return false;
   }
   split_grain(parent, frag, rec, st, added);

@@ -50,12 +50,13 @@ struct RemovedMassByPath {
 };
 
 // What the fragment builders made so far (summary.json fragment_grid_nodes_per_child,
-// fragment_refinements, fragment_pieces_absorbed).
+// fragment_refinements, fragment_pieces_absorbed, fragment_unresolved).
 struct FragmentCounts {
   long grid_nodes = 0;   // nodes of the children's grids
   long children = 0;     // children built
   long refinements = 0;  // splits repeated on a finer grid
   long absorbed = 0;     // unresolved pieces merged into a kept child
+  long unresolved = 0;   // broken grains the builder could not cut into a resolved piece (left whole)
 };
 
 // Everything besides the grains that a run needs to continue from a checkpoint. The

@@ -124,7 +124,7 @@ class LevelSetGrid {
   // The same zero level on a lattice of spacing h > 0 covering the surface nodes plus `pad`
   // cells (values interpolated from this grid), with surface nodes rebuilt from the zero
   // level at `node_spacing` (0: h). A piece resampled at its own size (Harmon et al. 2020
-  // §4.1: small pieces get a finer discretisation). Throws std::invalid_argument on a bad
+  // §3.4: small pieces get a finer discretisation). Throws std::invalid_argument on a bad
   // spacing, a grid without surface nodes or a lattice of more than 2e8 nodes.
   std::shared_ptr<const LevelSetGrid> resampled(double h, double node_spacing, int pad = 3) const;
   // The same zero level with values replaced by the signed distance to it (Harmon et al. 2020

@@ -141,6 +141,7 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
                 {"fragment_children", st.fragment_counts.children},
                 {"fragment_refinements", st.fragment_counts.refinements},
                 {"fragment_absorbed", st.fragment_counts.absorbed},
+                {"fragment_unresolved", st.fragment_counts.unresolved},
                 {"events", st.events},
                 {"analyses", st.analyses},
                 {"analyses_skipped", st.analyses_skipped},
@@ -275,6 +276,7 @@ SimulationState read_state(const Config& s) {
   st.fragment_counts.children = s.integer("fragment_children", 0, 0);
   st.fragment_counts.refinements = s.integer("fragment_refinements", 0, 0);
   st.fragment_counts.absorbed = s.integer("fragment_absorbed", 0, 0);
+  st.fragment_counts.unresolved = s.integer("fragment_unresolved", 0, 0);
   st.events = s.integer("events", 0, 0);
   st.analyses = s.integer("analyses", 0, 0);
   st.analyses_skipped = s.integer("analyses_skipped", 0, 0);

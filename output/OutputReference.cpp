@@ -381,6 +381,7 @@ std::vector<SummaryKey> simulation_keys() {
        "unbalanced_moment (turned away) and selected (passed every rule)", ""},
       {"fragment_refinements", "1", "splits the fragment builder repeated on a finer grid", ""},
       {"fragment_pieces_absorbed", "1", "unresolved pieces the fragment builder merged into a kept child", ""},
+      {"fragment_unresolved", "1", "broken grains the fragment builder could not cut into a piece it resolves, left whole (outcome unresolved)", ""},
       {"fragment_grid_nodes_per_child", "1", "mean nodes of the children's grids per child built (0 without children)", ""},
       {"analyses_failed", "1", "analyses or fragment builds that failed (the grain stayed intact)", ""},
       {"analyses_failed_<reason>", "1",

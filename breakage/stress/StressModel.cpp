@@ -63,6 +63,10 @@ const OptionTable& stress_options() {
         opt::number("min_piece_fraction", &S::min_piece_fraction, 0, 0.45, "",
                     "the fracture plane is moved along its normal until each side holds at least this fraction of "
                     "the grain (2D: area); 0 = the plane through the contacts as is (our decision, not the paper's)"),
+        opt::number("min_piece_diameter", &S::min_piece_diameter, 0, 1, "m",
+                    "each side of the fracture plane holds at least the volume (2D: area) of a sphere (disc) of "
+                    "this diameter, and a grain of less than twice that is not broken (outcome too_small): Harmon "
+                    "et al. 2020 §3.4, first method, breakage halted at a minimum size; 0 = off"),
         opt::choice("plane_fallback", &S::plane_fallback, {"centroid", "shift"},
                     "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
                     "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
@@ -343,6 +347,8 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
                    [](const Contact* x, const Contact* y) { return norm2(x->force) > norm2(y->force); });
   if (dim_ == 3 && order.size() < 2) return finish("single_contact");  // held off until a second contact
 
+  const double fraction = piece_fraction(*g.shape);
+  if (fraction >= 0.5) return finish("too_small");
   const std::size_t need = dim_ == 3 ? 3 : 2;
   std::vector<Vec3> pts;
   for (std::size_t i = 0; i < order.size() && i < need; ++i) pts.push_back(g.to_local(order[i]->point));
@@ -355,22 +361,29 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   // as §3.3 lets it fill in for a missing contact (our reading; plane_fallback "centroid").
   // Only if that fails too is the plane shifted (min_piece_fraction, below).
   bool centroid_fallback = false;
-  if (o_.plane_fallback == "centroid" && o_.min_piece_fraction > 0 && pts.size() == need &&
-      smaller_side_fraction(*g.shape, *plane) < o_.min_piece_fraction) {
+  if (o_.plane_fallback == "centroid" && fraction > 0 && pts.size() == need &&
+      smaller_side_fraction(*g.shape, *plane) < fraction) {
     const std::vector<Vec3> fewer(pts.begin(), pts.end() - 1);
     const auto alt = fracture_plane(fewer, f_body, dim_, g.shape->equivalent_diameter());
-    if (alt && smaller_side_fraction(*g.shape, *alt) >= o_.min_piece_fraction) {
+    if (alt && smaller_side_fraction(*g.shape, *alt) >= fraction) {
       plane = alt;
       centroid_fallback = true;
     }
   }
   a.set_figure("plane_through_centroid", centroid_fallback ? 1.0 : 0.0);
   // §3.3 fixes the plane's orientation by the contacts (eqs. 18–20); its offset is kept
-  // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction).
-  const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, o_.min_piece_fraction);
+  // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction,
+  // min_piece_diameter).
+  const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, fraction);
   a.broken = true;
   a.fracture = CuttingSurfaces{{cut}};
   return finish("split");
+}
+
+double StressModel::piece_fraction(const Shape& g) const {
+  const double d = o_.min_piece_diameter;
+  const double vmin = dim_ == 3 ? kPi * d * d * d / 6 : kPi * d * d / 4;
+  return std::max(o_.min_piece_fraction, vmin / g.volume());
 }
 
 std::unique_ptr<BreakageModel> make_stress(const Config& cfg, const EngineContext& ctx) {

@@ -52,6 +52,12 @@ struct StressOptions {
   // for a missing contact; the shift below applies only if that plane fails too. "shift":
   // keep the orientation and only shift the plane.
   std::string plane_fallback = "centroid";
+  // "min_piece_diameter" (m): Harmon et al. 2020 §3.4's first way with pieces as small as
+  // their discretisation, breakage halted at a minimum size. Each side of the plane must hold
+  // at least the volume (2D: area) of a sphere (disc) of this diameter, as min_piece_fraction
+  // does with a fraction; a grain of less than twice that volume is not broken (outcome
+  // too_small). 0 = off.
+  double min_piece_diameter = 0;
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
 };
@@ -105,7 +111,8 @@ class StressModel final : public BreakageModel {
   void inherit_strength(const Grain& parent, Grain& child, const Material& m, Rng& rng) const override;
   // Outcomes: split (broken, a CuttingSurfaces with one plane), intact, no_load (no contact
   // carries force), single_contact (3D: one partner; held off, §3.3), degenerate_contacts
-  // (the contacts fix no plane). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
+  // (the contacts fix no plane), too_small (failed, but less than two pieces of
+  // min_piece_diameter). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
   // equivalent_stress_Pa, strength_Pa (and tensile_strength_Pa for max_principal),
   // plane_through_centroid (1 when StressOptions::plane_fallback replaced the plane).
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
@@ -126,6 +133,9 @@ class StressModel final : public BreakageModel {
   int dim_;
   const stress::CriterionEntry* entry_;
   std::unique_ptr<stress::Criterion> criterion_;
+  // The smallest fraction of g's volume each side of the plane must hold: min_piece_fraction,
+  // or more by min_piece_diameter; >= 0.5 when g cannot give two such pieces.
+  double piece_fraction(const Shape& g) const;
 };
 
 std::unique_ptr<BreakageModel> make_stress(const Config& cfg, const EngineContext& ctx);

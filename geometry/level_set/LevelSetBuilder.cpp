@@ -97,7 +97,7 @@ double capped_spacing(double h, const Aabb& box, int dim, long max_nodes) {
 }  // namespace
 
 // The split on the parent's grid, repeated on grids refined by halves while it removes a piece
-// the grid cannot resolve or cannot resolve the cut at all (Harmon et al. 2020 §4.1, second
+// the grid cannot resolve or cannot resolve the cut at all (Harmon et al. 2020 §3.4, second
 // method), down to resolve_diameter / cells_across and the max_grid_nodes cap.
 SplitResult LevelSetBuilder::refined_split(const LevelSetGrid& phi1, const Fracture& fracture, SplitOptions& so,
                                            bool through, FragmentResult& out) const {
@@ -149,10 +149,8 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
   if (sr.missed) {
     // The cut runs through the grain but no grid node lies on one side of it, even on the
     // finest grid allowed: one plane is moved along its normal to leave at least one row of
-    // grid nodes on each side (counted as a fallback). A grain with a single row of nodes along
-    // the normal, or whose moved cut still fails, is of the size of its discretisation: Harmon et
-    // al. 2020 §3.4 remove such grains, so it is crushed — all of it removed volume (no
-    // child; events.csv outcome crushed). A cut that misses the grain stays a no_split.
+    // grid nodes on each side (counted as a fallback). A cut that misses the grain stays a
+    // no_split.
     if (!through) {
       out.method = "no_split";
       return out;
@@ -161,16 +159,45 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
       sr = moved_cut(phi1, cs->planes.front(), so);
       if (!sr.missed && !sr.children.empty()) out.method = "level_set_planes_moved";
     }
-    if (sr.missed || sr.children.empty()) {
-      out.method = "level_set_unresolved";
-      out.removed_volume = V;
+    if (!sr.missed && !sr.children.empty()) ++out.fallbacks;
+  }
+  if (sr.missed || sr.children.empty()) {
+    // No piece the grid can resolve: a grain with a single row of nodes along the normal, a
+    // moved cut that still fails, or a split whose every piece is thinner than
+    // min_thickness_cells. Such a grain is of the size of its discretisation (Harmon et al.
+    // 2020 §3.4). fines_policy "remove" (third method): all of it is removed volume (no child;
+    // events.csv outcome crushed). "halt" (first method): it does not break — no child, no
+    // removed volume, unresolved; the simulation leaves it whole and counts it.
+    out.method = "level_set_unresolved";
+    if (opt_.fines_policy == "halt") {
+      out.unresolved = true;
+    } else {
+      out.removed_volume = parent.volume();
       out.fallbacks = 1;
-      return out;
     }
-    ++out.fallbacks;
+    return out;
   }
   finish_children(parent, sr, out);
+  if (leaves_fines(out)) {
+    // fines_policy "halt" (Harmon et al. 2020 §3.4, first method): a split that would leave
+    // fines is not made.
+    FragmentResult whole;
+    whole.method = "level_set_unresolved";
+    whole.unresolved = true;
+    whole.refinements = out.refinements;
+    return whole;
+  }
   return out;
+}
+
+// With fines_policy "halt": true when the split removes a piece or gives a child finer than
+// resolve_diameter (which the run removes as fines).
+bool LevelSetBuilder::leaves_fines(const FragmentResult& out) const {
+  if (opt_.fines_policy != "halt") return false;
+  if (out.removed_volume > 0) return true;
+  for (const auto& c : out.children)
+    if (c.shape->equivalent_diameter() < opt_.resolve_diameter) return true;
+  return false;
 }
 
 // Each child at its own resolution, then the mass bookkeeping (see the header): grid volumes
@@ -220,7 +247,7 @@ const OptionTable& level_set_options() {
                     "a piece smaller than this × the parent's volume is removed (counted)"),
         opt::number("cells_across", &S::cells_across, 0, 1000, "",
                     "grid cells across a child's thickness (twice its deepest inside distance): each child is "
-                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §4.1, second "
+                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §3.4, second "
                     "method; the count is ours; measured in docs/validation.md); 0 = off: children keep the parent's "
                     "lattice and no split is refined"),
         opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",
@@ -231,6 +258,12 @@ const OptionTable& level_set_options() {
                      "many grid cells of a kept child is a lattice artefact of the cut: the child is rebuilt as the "
                      "union of the two instead of removing it as fines (Harmon et al. 2020 eqs. 14-15 keep such nodes in the child; "
                      "ours); 0 = every such piece is removed"),
+        opt::choice("fines_policy", &S::fines_policy, {"remove", "halt"},
+                    "a split that leaves a piece the grid cannot resolve (thinner than min_thickness_cells, after "
+                    "absorb_cells), a child finer than resolve_diameter, or no resolved piece at all: remove = those "
+                    "pieces (or the whole grain: outcome crushed) leave as fines (Harmon et al. 2020 §3.4, third "
+                    "method); halt = the split is not made and the grain stays whole (outcome unresolved, "
+                    "summary.json fragment_unresolved; §3.4, first method: breakage halted at a minimum size)"),
         opt::integer("max_grid_nodes", &S::max_grid_nodes, 1000, 100000000,
                      "nodes of one grid (a refined split's or a child's) at most: the spacing is raised to meet it "
                      "(ours)"),

@@ -23,7 +23,13 @@
 // leaves the grain as it was. With cells_across > 0 a split with absorbed pieces is refined
 // first, like one with removed pieces.
 //
-// Resolution that follows the pieces (Harmon et al. 2020 §4.1 name three ways to treat
+// fines_policy "halt" (Harmon et al. 2020 §3.4, first method: breakage halted at a minimum
+// size): a split that would still remove a piece (after absorb_cells), give a child finer than
+// resolve_diameter, or give no resolved piece at all is not made; the builder returns it
+// unresolved and the grain stays whole. "remove" (the default) lets those pieces, or the whole
+// grain, leave as fines (§3.4, third method).
+//
+// Resolution that follows the pieces (Harmon et al. 2020 §3.4 name three ways to treat
 // pieces as small as their discretisation: stop breaking them, refine their discretisation,
 // remove them; this is the second). Off by default (measured: docs/validation.md). With
 // cells_across > 0:
@@ -54,6 +60,10 @@ struct LevelSetBuilderOptions {
   double resolve_diameter = 0;             // m; splits are refined down to this / cells_across
   long max_grid_nodes = 1000000;           // nodes of one grid (a split's or a child's) at most
   int absorb_cells = 0;                    // a piece to remove this near a kept child is absorbed
+  // "remove": pieces the grid cannot resolve and children finer than resolve_diameter leave
+  // as fines (Harmon et al. 2020 §3.4, third method); "halt": such a split is not made, the
+  // grain stays whole (unresolved; §3.4, first method).
+  std::string fines_policy = "remove";
 };
 
 class LevelSetBuilder final : public FragmentBuilder {
@@ -63,9 +73,11 @@ class LevelSetBuilder final : public FragmentBuilder {
   // Thread-safe (const, no shared mutable state). A surface that misses the grain gives
   // no child and method "no_split" (not an error). A plane through the grain that leaves no
   // grid node on one side is moved to leave a row of nodes on each (method
-  // "level_set_planes_moved"); if the grain has a single row of nodes along the normal, or
-  // the moved cut fails too, no child, removed_volume = V_parent and method
-  // "level_set_unresolved" (crushed to fines, Harmon et al. 2020 §3.4).
+  // "level_set_planes_moved"); if the grain has a single row of nodes along the normal, the
+  // moved cut fails too, or every piece is thinner than min_thickness_cells: no child and
+  // method "level_set_unresolved" — with fines_policy "remove" removed_volume = V_parent
+  // (crushed to fines, Harmon et al. 2020 §3.4, third method), with "halt" no removed volume
+  // and FragmentResult::unresolved (the grain stays whole, first method).
   // FragmentResult::grid_nodes: the children's grid nodes; refinements: the splits repeated
   // on a finer grid.
   FragmentResult build(const Shape& parent, const Fracture& fracture) const override;
@@ -77,6 +89,7 @@ class LevelSetBuilder final : public FragmentBuilder {
   std::shared_ptr<const LevelSetGrid> own_resolution(const std::shared_ptr<const LevelSetGrid>& g, double coarsest,
                                                      double node_ratio) const;
   void finish_children(const Shape& parent, SplitResult& sr, FragmentResult& out) const;
+  bool leaves_fines(const FragmentResult& out) const;
   LevelSetBuilderOptions opt_;
 };
 

@@ -263,7 +263,7 @@ TEST(LevelSetSplit, PiecesThinnerThanACellNextToAKeptChildAreAbsorbed) {
   EXPECT_NEAR(on.children[0].volume / whole, 1.0, 0.01);
 }
 
-// Harmon et al. 2020 §4.1, second method: the same sub-cell cap is kept when the split may be
+// Harmon et al. 2020 §3.4, second method: the same sub-cell cap is kept when the split may be
 // refined (resolve_diameter): the split is repeated on finer grids until the cap is resolved,
 // and it becomes a child with the circular segment's area; nothing is removed.
 TEST(LevelSetSplit, ThinCapIsKeptWhenTheSplitIsRefined) {
@@ -334,12 +334,14 @@ TEST(LevelSetSplit, ResampledGridKeepsTheZeroLevel) {
   EXPECT_THROW(g->resampled(0.0, 0), std::invalid_argument);
 }
 
-// Harmon et al. 2020 §3.4: a grain of the size of its discretisation is removed. A slab
-// 1.6 cells thick (one row of grid nodes inside) cut along its length: its grid cannot
-// separate two pieces (split_by_planes finds one side empty), yet the plane runs through it.
-// All of it is removed volume (the Simulation records the grain as crushed), the budget
-// exact. The same slab cut across its length splits in two; a plane beyond it misses it.
-TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthIsCrushedToFines) {
+// Harmon et al. 2020 §3.4: a grain of the size of its discretisation. A slab 1.6 cells thick
+// (one row of grid nodes inside) cut along its length: its grid cannot separate two pieces
+// (split_by_planes finds one side empty), yet the plane runs through it. fines_policy "halt"
+// (first method): no child and no removed volume, marked unresolved (the Simulation leaves the
+// grain whole). "remove" (third method, the default): all of it is removed volume (outcome
+// crushed), the budget exact. The same slab cut across its length splits in two; a plane
+// beyond it misses it.
+TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthStaysWhole) {
   const double a = 10 * kH, b = 0.8 * kH;
   auto box = [&](const Vec3& p) {
     const double qx = std::abs(p.x) - a, qy = std::abs(p.y) - b;
@@ -347,19 +349,84 @@ TEST(LevelSetSplit, UnresolvedThinGrainCutAlongItsLengthIsCrushedToFines) {
   };
   // Bounds on whole cells about the origin: a lattice row runs along y = 0.
   const auto slab = Shape::from_level_set(LevelSetGrid::sample(2, {{-a - 2 * kH, -3 * kH, 0}, {a + 2 * kH, 3 * kH, 0}}, kH, box));
-  LevelSetBuilder lb;
+  LevelSetBuilderOptions halt;
+  halt.fines_policy = "halt";
+  const LevelSetBuilder lb(halt);
   const CuttingSurfaces along{{{{0, 1, 0}, 0.3 * kH}}};
   ASSERT_TRUE(split_by_planes(slab->level_set(), {{{0, 1, 0}, 0.3 * kH}}).missed);
   const FragmentResult fr = lb.build(*slab, along);
   EXPECT_EQ(fr.method, "level_set_unresolved");
+  EXPECT_TRUE(fr.unresolved);
   EXPECT_TRUE(fr.children.empty());
-  EXPECT_NEAR(fr.removed_volume, slab->volume(), 1e-12 * slab->volume());
-  EXPECT_EQ(fr.fallbacks, 1);
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  EXPECT_EQ(fr.fallbacks, 0);
+  const FragmentResult crushed = LevelSetBuilder().build(*slab, along);
+  EXPECT_EQ(crushed.method, "level_set_unresolved");
+  EXPECT_FALSE(crushed.unresolved);
+  EXPECT_TRUE(crushed.children.empty());
+  EXPECT_NEAR(crushed.removed_volume, slab->volume(), 1e-12 * slab->volume());
+  EXPECT_EQ(crushed.fallbacks, 1);
   const FragmentResult across = lb.build(*slab, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
   EXPECT_EQ(across.children.size(), 2u);
+  EXPECT_FALSE(across.unresolved);
   const FragmentResult miss = lb.build(*slab, CuttingSurfaces{{{{0, 1, 0}, 3 * b}}});
   EXPECT_EQ(miss.method, "no_split");
   EXPECT_EQ(miss.removed_volume, 0.0);
+}
+
+// A split whose every piece is thinner than min_thickness_cells (here 25 cells: a 20-cell
+// disk halved) resolves nothing either: with fines_policy "halt" unresolved, no child, no
+// removed volume.
+TEST(LevelSetSplit, SplitWithEveryPieceTooThinIsUnresolved) {
+  const auto disk = Shape::from_level_set(disk_grid());
+  LevelSetBuilderOptions o;
+  o.min_thickness_cells = 25;
+  o.fines_policy = "halt";
+  const FragmentResult fr = LevelSetBuilder(o).build(*disk, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
+  EXPECT_TRUE(fr.unresolved);
+  EXPECT_EQ(fr.method, "level_set_unresolved");
+  EXPECT_TRUE(fr.children.empty());
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  const FragmentResult kept = LevelSetBuilder().build(*disk, CuttingSurfaces{{{{1, 0, 0}, 0.0}}});
+  EXPECT_FALSE(kept.unresolved);
+  EXPECT_EQ(kept.children.size(), 2u);
+}
+
+// fines_policy "halt" (Harmon et al. 2020 §3.4, first method): a split that would leave fines is
+// not made. A 1 mm disk (20 cells across) cut at x = 0.7 R: the cap holds 0.2955 R² (closed
+// form R²(acos 0.7 − 0.7·√0.51)), d = 0.613 mm. Below resolve_diameter 0.8 mm the split is
+// unresolved; with 0.5 mm it is made. With the cap thinner than min_thickness_cells, "remove"
+// removes it (one child and removed volume) and "halt" leaves the grain whole.
+TEST(LevelSetSplit, FinesPolicyHaltLeavesTheGrainWholeInsteadOfRemovingFines) {
+  const auto disk = Shape::from_level_set(disk_grid());
+  const CuttingSurfaces at07{{{{1, 0, 0}, 0.7 * kR}}};
+  const double cap = kR * kR * (std::acos(0.7) - 0.7 * std::sqrt(0.51));
+  LevelSetBuilderOptions remove;
+  remove.resolve_diameter = 0.8e-3;
+  const FragmentResult made = LevelSetBuilder(remove).build(*disk, at07);
+  ASSERT_EQ(made.children.size(), 2u);
+  const double small = std::min(made.children[0].shape->volume(), made.children[1].shape->volume());
+  EXPECT_NEAR(small, cap, 0.05 * cap);
+  EXPECT_LT(std::sqrt(4 * small / kPi), 0.8e-3);
+  LevelSetBuilderOptions halt = remove;
+  halt.fines_policy = "halt";
+  const FragmentResult held = LevelSetBuilder(halt).build(*disk, at07);
+  EXPECT_TRUE(held.unresolved);
+  EXPECT_TRUE(held.children.empty());
+  EXPECT_EQ(held.removed_volume, 0.0);
+  halt.resolve_diameter = 0.5e-3;
+  EXPECT_EQ(LevelSetBuilder(halt).build(*disk, at07).children.size(), 2u);
+  remove.min_thickness_cells = 5;  // the cap, 3 cells thick, is removed; the rest (17) is kept
+  halt.min_thickness_cells = 5;
+  const FragmentResult chip = LevelSetBuilder(remove).build(*disk, at07);
+  ASSERT_EQ(chip.children.size(), 1u);
+  EXPECT_GT(chip.removed_volume, 0.0);
+  const FragmentResult no_chip = LevelSetBuilder(halt).build(*disk, at07);
+  EXPECT_TRUE(no_chip.unresolved);
+  EXPECT_EQ(no_chip.removed_volume, 0.0);
+  LevelSetBuilderOptions bad;
+  bad.fines_policy = "keep";
+  EXPECT_THROW(LevelSetBuilder{bad}, std::exception);
 }
 
 // A slab 3.2 cells thick (grid rows at y = −h, 0, h inside) cut at y = −1.3 h, below its lowest

@@ -95,6 +95,19 @@ class WholeBuilder : public FragmentBuilder {
   }
 };
 
+// Cannot cut the grain into a piece it resolves (FragmentResult::unresolved): no child, no
+// removed volume. The Simulation reports unresolved and keeps the grain.
+class UnresolvedBuilder : public FragmentBuilder {
+ public:
+  std::string name() const override { return "unresolved"; }
+  FragmentResult build(const Shape&, const Fracture&) const override {
+    FragmentResult r;
+    r.method = "level_set_unresolved";
+    r.unresolved = true;
+    return r;
+  }
+};
+
 // A sphere → one sphere of 7/8 of the volume at +x and one of 1/8 at −x (volume exact).
 // With `chip`, the 1/8 piece is dropped by the builder itself (FragmentResult::removed_volume).
 class EighthBuilder : public FragmentBuilder {
@@ -409,7 +422,9 @@ namespace {
 struct Lineage {
   std::vector<Grain> grains;
   std::map<GrainId, int> no_split;  // no_split records per grain
+  std::map<GrainId, int> unresolved;  // unresolved records per grain
   long events = 0;
+  RunSummary sum;
 };
 
 // `count` 1 mm spheres on the x axis, `spacing` apart.
@@ -434,12 +449,14 @@ Lineage run_lineage(std::unique_ptr<FragmentBuilder> builder, double child_facto
     Lineage* r;
     void on_analysis(const Simulation&, const AnalysisRecord& a) override {
       if (a.analysis.outcome == "no_split") ++r->no_split[a.grain];
+      if (a.analysis.outcome == "unresolved") ++r->unresolved[a.grain];
     }
   };
   auto o = std::make_shared<Rec>();
   o->r = &r;
   sim.add_observer(o);
-  r.events = sim.run().breakage_events;
+  r.sum = sim.run();
+  r.events = r.sum.breakage_events;
   r.grains = sim.grains();
   return r;
 }
@@ -459,21 +476,42 @@ TEST(SimulationLoop, CrushCountFollowsTheLineage) {
   EXPECT_GT(second, 0) << "no grandchild: the test would not see the count carried over";
 }
 
+// The four grains unbroken (generation 0), each with a crush_count equal to its records in
+// `verdicts`; returns their sum.
+static int unsplit_verdicts(const Lineage& r, const std::map<GrainId, int>& verdicts) {
+  EXPECT_EQ(r.grains.size(), 4u);
+  int total = 0;
+  for (const auto& g : r.grains) {
+    EXPECT_EQ(g.generation, 0);
+    const auto it = verdicts.find(g.id);
+    const int expect = it == verdicts.end() ? 0 : it->second;
+    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
+    total += expect;
+  }
+  return total;
+}
+
 // A verdict the builder cannot split (no_split) keeps the grain and still counts: the
 // count is the number of no_split records of that grain.
 TEST(SimulationLoop, CrushCountCountsUnsplitVerdicts) {
   const Lineage r = run_lineage(std::make_unique<WholeBuilder>(), 1000);
   EXPECT_EQ(r.events, 0);
-  ASSERT_EQ(r.grains.size(), 4u);
-  int total = 0;
-  for (const auto& g : r.grains) {
-    EXPECT_EQ(g.generation, 0);
-    const auto it = r.no_split.find(g.id);
-    const int expect = it == r.no_split.end() ? 0 : it->second;
-    EXPECT_EQ(g.crush_count, expect) << "grain " << g.id;
-    total += g.crush_count;
-  }
+  EXPECT_GE(unsplit_verdicts(r, r.no_split), 4) << "every grain is loaded past its limit; each must have been judged broken";
+}
+
+// Harmon et al. 2020 §3.4, first method: a verdict the builder cannot turn into a resolved
+// piece (unresolved) is not a breakage. Each grain stays whole with all of its mass, and
+// summary.json's fragment_unresolved counts the verdicts (crush_count too, as for no_split).
+TEST(SimulationLoop, UnresolvedSplitLeavesTheGrainWholeAndCounted) {
+  const Lineage r = run_lineage(std::make_unique<UnresolvedBuilder>(), 1000);
+  EXPECT_EQ(r.events, 0);
+  EXPECT_EQ(r.sum.mass_removed, 0.0);
+  EXPECT_EQ(r.sum.extra.at("mass_removed_crushed_kg"), 0.0);
+  EXPECT_NEAR(r.sum.mass_final, r.sum.mass_initial, 1e-12 * r.sum.mass_initial);
+  EXPECT_TRUE(r.no_split.empty());
+  const int total = unsplit_verdicts(r, r.unresolved);
   EXPECT_GE(total, 4) << "every grain is loaded past its limit; each must have been judged broken";
+  EXPECT_EQ(r.sum.extra.at("fragment_unresolved"), static_cast<double>(total));
 }
 
 namespace {

@@ -393,6 +393,58 @@ TEST(StressModel, ContactsNearOneSideStillSplitTheGrainInTwoMeaningfulPieces) {
   EXPECT_THROW(make_stress(cb, EngineContext{}), ConfigError);
 }
 
+// Harmon et al. 2020 §3.4, first method (min_piece_diameter): each side of the plane holds at
+// least a sphere of that diameter. The sliver plane of the test above (three contacts close
+// around the pole, plane_fallback "shift") is moved until the cap holds a quarter of the grain
+// (d_min = 2R·0.25^(1/3)): closed form h²(3 − h)/4 = 0.25, offset 0.347 R. A grain of less than twice that
+// sphere does not break (outcome too_small); below the strength it stays intact as before.
+TEST(StressModel, MinPieceDiameterMovesThePlaneAndHaltsBreakageOfSmallGrains) {
+  const double R = 1e-3;
+  double lo = 0, hi = 1;  // h²(3 − h)/4 = 0.25 by bisection
+  for (int i = 0; i < 60; ++i) ((0.5 * (lo + hi)) * (0.5 * (lo + hi)) * (3 - 0.5 * (lo + hi)) / 4 < 0.25 ? lo : hi) = 0.5 * (lo + hi);
+  const double offset_exact = R * (1 - lo);
+  const double d_quarter = 2 * R * std::cbrt(0.25);
+  auto m = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"plane_fallback", "shift"},
+                  {"min_piece_diameter", d_quarter}},
+                 3);
+  EXPECT_DOUBLE_EQ(model({{"criterion", "von_mises"}}, 3)->options().min_piece_diameter, 0.0);  // off by default
+  Grain g;
+  g.shape = Shape::sphere(R);
+  Rng rng(1);
+  m->assign_strength(g, Material{}, rng);
+  const double zc = std::sqrt(R * R - 0.01 * R * R);
+  const double zb = -std::sqrt(R * R - 0.18 * R * R);
+  auto load = [&](double P) {
+    return std::vector<Contact>{wall_contact(1, {0.1 * R, 0, zc}, {0, 0, -P}), wall_contact(2, {-0.05 * R, 0.0866 * R, zc}, {0, 0, -P}),
+                                wall_contact(3, {-0.05 * R, -0.0866 * R, zc}, {0, 0, -P}),
+                                wall_contact(4, {0.3 * R, 0.3 * R, zb}, {0, 0, 0.75 * P}), wall_contact(5, {-0.3 * R, 0.3 * R, zb}, {0, 0, 0.75 * P}),
+                                wall_contact(6, {-0.3 * R, -0.3 * R, zb}, {0, 0, 0.75 * P}), wall_contact(7, {0.3 * R, -0.3 * R, zb}, {0, 0, 0.75 * P})};
+  };
+  const auto a = m->analyse(g, Material{}, load(300));
+  ASSERT_TRUE(a.broken);
+  const CutPlane p = std::get<CuttingSurfaces>(*a.fracture).planes.at(0);
+  EXPECT_NEAR(std::abs(p.normal.z), 1.0, 1e-9);
+  // The 24³ lattice estimate: within one lattice layer (R/12) of the closed form; without
+  // the option the plane would shave the 0.07 % sliver (previous test).
+  EXPECT_NEAR(std::abs(p.offset), offset_exact, R / 12);
+  EXPECT_GT(smaller_side_fraction(*g.shape, p), 0.18);
+
+  // Twice the sphere of d_min is more than the grain: it cannot give two such pieces.
+  auto halt = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"min_piece_diameter", 1.01 * 2 * R * std::cbrt(0.5)}}, 3);
+  halt->assign_strength(g, Material{}, rng);
+  const auto h = halt->analyse(g, Material{}, load(300));
+  EXPECT_FALSE(h.broken);
+  EXPECT_EQ(h.outcome, "too_small");
+  EXPECT_FALSE(h.fracture);
+  EXPECT_EQ(halt->analyse(g, Material{}, load(0.1)).outcome, "intact");  // σ_VM ≈ 0.14 MPa < 1 MPa
+  // Just below the limit it still splits, through the middle.
+  auto just = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"min_piece_diameter", 0.99 * 2 * R * std::cbrt(0.5)}}, 3);
+  just->assign_strength(g, Material{}, rng);
+  const auto j = just->analyse(g, Material{}, load(300));
+  ASSERT_TRUE(j.broken);
+  EXPECT_NEAR(smaller_side_fraction(*g.shape, std::get<CuttingSurfaces>(*j.fracture).planes.at(0)), 0.5, 0.03);
+}
+
 TEST(StressModel, SingleContactIn3DIsHeldOff) {
   auto m = model({{"criterion", "von_mises"}, {"weibull", false}}, 3);
   Grain g;
