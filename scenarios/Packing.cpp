@@ -357,6 +357,21 @@ SettleProgress settle_start(Simulation& sim, const SettleSettings& ss) {
 
 }  // namespace
 
+namespace {
+
+// Whether a window ends at rest. A settling cloud: the platen carries at least half the
+// settling stress and moved less than settle.tolerance × the mean diameter. A relaxing file
+// packing (damped): the platen stress is within 10 % of the settling stress and the platen
+// moved less than 1 % of the mean diameter; the heavily damped grains keep creeping into a
+// denser packing long after the other engine's overlaps are gone (0.17 s on the quick
+// Zhu & Zhao packing for 1.3 % of its height), which is not what relaxing is for.
+bool at_rest(double platen_stress, double travel, const SettleSettings& ss, double mean_diameter, bool relaxing) {
+  if (!relaxing) return platen_stress > 0.5 * ss.stress && travel < ss.tolerance * mean_diameter;
+  return std::abs(platen_stress - ss.stress) <= 0.1 * ss.stress && travel < 0.01 * mean_diameter;
+}
+
+}  // namespace
+
 SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const SettleControl& ctl) {
   SettleResult res;
   if (!spec.settle) return res;
@@ -395,8 +410,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
     sim.check_guards("settling", p.dt, p.steps % guard_every == 0);
     if (p.steps % window == 0) {
       const double z = e.platen_position();
-      const bool loaded = e.platen_force() > 0.5 * ss.stress * area;
-      if (loaded && std::abs(p.last_platen - z) < ss.tolerance * p.mean_diameter) {
+      if (at_rest(area > 0 ? e.platen_force() / area : 0.0, std::abs(p.last_platen - z), ss, p.mean_diameter, damped)) {
         res.converged = true;
         break;
       }
