@@ -694,7 +694,17 @@ void run_combinations(const CompareRequest& req, const RunRequest& base, const s
 
 int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
 
-CompareOutcome compare_runs(const CompareRequest& req) {
+// With --jobs N and no --threads the runs share the machine's cores: each gets cores / N
+// threads (at least one), so N runs of a scenario's own "threads" do not oversubscribe the
+// CPUs (OpenMP threads spin at every barrier while another process holds their CPU).
+CompareRequest with_threads_per_job(CompareRequest req) {
+  if (!req.threads && req.jobs > 1)
+    req.threads = std::max(1, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) / req.jobs);
+  return req;
+}
+
+CompareOutcome compare_runs(const CompareRequest& request) {
+  const CompareRequest req = with_threads_per_job(request);
   CompareOutcome outcome;
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<VaryAxis> axes = vary_axes(req);

@@ -24,7 +24,7 @@ class CompareCommand : public Subcommand {
     c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", req_.threads, "threads of each run (overrides the scenario's)")
         ->check(CLI::Range(1, 1024));
-    c->add_option("--jobs", req_.jobs, "combinations run at the same time (each a process; default 1)")
+    c->add_option("--jobs", req_.jobs, "combinations run at the same time (each a process; default 1); without --threads each gets cores / jobs threads")
         ->check(CLI::Range(1, 64));
     c->add_flag("--quiet", req_.quiet, "only errors on stderr");
     c->add_flag("--force", req_.force,
@@ -68,7 +68,7 @@ class SweepCommand : public Subcommand {
     c->add_option("--seed", req_.seed, "random seed (overrides the scenario's)")->check(seed_validator());
     c->add_option("--threads", req_.threads, "threads of each run (overrides the scenario's)")
         ->check(CLI::Range(1, 1024));
-    jobs_ = c->add_option("--jobs", req_.jobs, "settings run at the same time (each a process; default 1)")
+    jobs_ = c->add_option("--jobs", req_.jobs, "settings run at the same time (each a process; default 1); without --threads each gets cores / jobs threads")
                 ->check(CLI::Range(1, 64));
     c->add_flag("--quiet", req_.quiet, "only errors on stderr");
     c->add_flag("--force", req_.force,

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/Rng.h"
+#include "geometry/MeshDistance.h"
 
 namespace crumble {
 
@@ -167,12 +168,26 @@ void LsdemEngine::set_container(const Container& c) {
   platen_.reset(c.height);
 }
 
+// A shape's level set as this engine collides it. With sphere_representation "polyhedron" a
+// sphere is the hull of its mesh, sampled on the sphere's own grid (same frame, same spacing),
+// so that the faceted grains a polyhedral engine settled keep their contacts here.
+std::shared_ptr<const LevelSetGrid> LsdemEngine::grid_of(const Shape& s) const {
+  if (s_.exact_spheres || s.kind() != ShapeKind::Sphere || ctx_.dimension != 3) return s.level_set_ptr();
+  const auto sphere = s.level_set_ptr();
+  const MeshDistance hull(s.convex_hull());
+  LevelSetOptions opt;
+  opt.target_nodes = s.resolution().surface_nodes;
+  opt.name = "shape " + s.describe() + " as its hull";
+  return LevelSetGrid::sample(3, s.bounds(), sphere->spacing(), [&](const Vec3& p) { return hull.signed_distance(p); },
+                              opt);
+}
+
 LsdemEngine::ShapeData& LsdemEngine::shape_data(const Shape::Ptr& s) {
   auto it = shapes_.find(s.get());
   if (it != shapes_.end()) return *it->second;
   auto d = std::make_shared<ShapeData>();
   d->shape = s;
-  d->grid = s->level_set_ptr();
+  d->grid = grid_of(*s);
   const auto& gn = d->grid->nodes();
   const auto& gw = d->grid->node_weights();
   std::vector<int> idx(gn.size());
@@ -1051,14 +1066,15 @@ void LsdemEngine::integrate(double dt) {
   // Platen along the vertical axis.
   if (has_container_ && container_.height > 0 && !container_.open) {
     // Mass rule and semi-implicit update shared by every engine (core/Platen.h); the
-    // global damping acts on the platen too.
+    // global damping acts on the platen too, the relaxation's damping does not (a platen
+    // damped as the grains are would creep under the settling stress and look at rest).
     double M = 0;
     if (platen_.force_driven() && !(container_.platen_mass > 0)) {
       for (const auto& b : bodies_) M += b.md;  // density-scaled masses (no selective scaling)
       M /= s_.mass_scale;
     }
     M = platen_mass(container_, M, s_.mass_scale);
-    platen_.advance(dt, platen_force_, M, s_.global_damping + relax_damping_);
+    platen_.advance(dt, platen_force_, M, s_.global_damping);
   }
 }
 
@@ -1339,6 +1355,10 @@ const OptionTable& lsdem_options() {
         opt::number("selective_dt_fraction", &S::selective_dt_fraction, 0, 1, "",
                     "selective mass scaling with the target step = this × the stable step of the packing first "
                     "stepped (the initial packing); 0 = off; not with selective_dt"),
+        opt::mapped_choice("sphere_representation", &S::exact_spheres, {{"sphere", true}, {"polyhedron", false}},
+                           "a sphere's level set: the sphere (\"sphere\") or the convex hull of its mesh "
+                           "(\"polyhedron\": the 42-vertex icosphere Bullet and ODE collide by default, so a "
+                           "packing they built loads on lsdem without their facets' overlaps)"),
         opt::number("pair_list_skin", &S::pair_list_skin, 0, 10, "",
                     "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
                     "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "

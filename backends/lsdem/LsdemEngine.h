@@ -94,6 +94,7 @@ struct LsdemSettings {
   double selective_dt = 0;           // s: target step of selective mass scaling; 0 = off
   double selective_dt_fraction = 0;  // target = this × the initial packing's stable step; 0 = off
   double pair_list_skin = 0.2;          // Verlet skin / largest bounding radius (0: list rebuilt every step)
+  bool exact_spheres = true;            // "sphere_representation": "sphere" (else the hull of its mesh)
   int threads = 1;
 };
 
@@ -230,6 +231,7 @@ class LsdemEngine final : public Engine {
   };
   using Wall = WallPlane;  // normal points into the box
   ShapeData& shape_data(const Shape::Ptr& s);
+  std::shared_ptr<const LevelSetGrid> grid_of(const Shape& s) const;
   void compute_forces(double dt);
   // The steps of compute_forces. Work items: grain pairs in reach (their states kept,
   // refreshed or dropped); grains near a shape wall, then near a plane wall (returns the

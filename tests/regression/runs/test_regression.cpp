@@ -107,7 +107,8 @@ TEST(Regression, CrushableOedometerZhuZhao) {
   // too, so they get wide bands; the mass budget is exact.
   check({"oedometer_zhu_zhao_small", "oedometer_zhu_zhao_quick.json",
          "--set packing.count=40 --set container.lx=6e-3 --set container.ly=6e-3 --set loading.max_stress=5e6"
-         " --set loading.ramp_time=0.025 --set breakage.spacing_fraction=0.1 --set output.vtk_every=0",
+         " --set loading.ramp_time=0.025 --set breakage.spacing_fraction=0.1 --set output.vtk_every=0"
+         " --set engine.sphere_representation=polyhedron",
          {{"breakage_events", 0.5}, {"grains_final", 0.3}, {"void_ratio_final", 0.05}, {"mass_initial_kg", 1e-12}}});
 }
 
@@ -122,6 +123,7 @@ TEST(Regression, CrushableOedometerZhuZhaoWithMomentCouples) {
   check({"oedometer_zhu_zhao_small_couples", "oedometer_zhu_zhao_quick.json",
          "--set packing.count=40 --set container.lx=6e-3 --set container.ly=6e-3 --set loading.max_stress=5e6"
          " --set loading.ramp_time=0.025 --set breakage.spacing_fraction=0.1 --set output.vtk_every=0"
+         " --set engine.sphere_representation=polyhedron"
          " --set screening.moment_couples=true",
          {{"breakage_events", 0.5}, {"grains_final", 0.3}, {"void_ratio_final", 0.05}, {"mass_initial_kg", 1e-12}}});
 }

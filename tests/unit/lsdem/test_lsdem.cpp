@@ -82,6 +82,33 @@ TEST(Lsdem, TwoSpheresLinearLaw) {
   }
 }
 
+// sphere_representation "polyhedron": a sphere collides as the hull of its mesh (the 42-vertex
+// icosphere Bullet and ODE collide). Two unit spheres face to face along a facet's normal,
+// closer than two radii by half the facet's depth below the sphere: the exact spheres
+// overlap by that much (|F| = k_n·δ within 2 %), the hulls do not touch. Vertex to vertex,
+// both representations overlap by δ.
+TEST(Lsdem, PolyhedronSphereRepresentationCollidesTheHull) {
+  auto sh = sphere(1.0, 0.025, 8000);
+  const TriMesh& hull = sh->convex_hull();
+  ASSERT_EQ(hull.vertices.size(), 42u);
+  const auto& t = hull.triangles.front();
+  const Vec3 a = hull.vertices[t[0]], b = hull.vertices[t[1]], c = hull.vertices[t[2]];
+  const Vec3 n = normalized(cross(b - a, c - a));
+  const double depth = 1 - std::abs(dot(n, a));  // the facet's plane lies this far inside
+  ASSERT_GT(depth, 0.04);
+  const double delta = 0.5 * depth;
+  LsdemSettings s;
+  s.kn = 1e6;
+  s.damping_ratio = 0;
+  const Quat id{1, 0, 0, 0};
+  EXPECT_NEAR(norm(pressed_pair(s, sh, delta, n, id).force) / (s.kn * delta), 1.0, 0.02) << "exact spheres";
+  s.exact_spheres = false;
+  EXPECT_EQ(norm(pressed_pair(s, sh, delta, n, id).force), 0.0) << "hulls a facet's depth apart";
+  // Vertex to vertex (the icosphere is centrally symmetric, so -v is a vertex too).
+  const Vec3 v = normalized(a);
+  EXPECT_GT(norm(pressed_pair(s, sh, delta, v, id).force), 0.0) << "hull vertices overlap";
+}
+
 // Hertz: F = (4/3) E* √R* δ^{3/2}, E* = E / (2(1 − ν²)), R* = R/2 (tolerance 1 %; the law
 // takes R from the equivalent radius, exact for spheres).
 TEST(Lsdem, TwoSpheresHertzLaw) {
