@@ -1358,7 +1358,8 @@ const OptionTable& lsdem_options() {
         opt::mapped_choice("sphere_representation", &S::exact_spheres, {{"sphere", true}, {"polyhedron", false}},
                            "a sphere's level set: the sphere (\"sphere\") or the convex hull of its mesh "
                            "(\"polyhedron\": the 42-vertex icosphere Bullet and ODE collide by default, so a "
-                           "packing they built loads on lsdem without their facets' overlaps)"),
+                           "packing they built loads on lsdem without their facets' overlaps; a level-set split still cuts "
+                           "the sphere, so its children start overlapping: for rigid grains or alpha-shape fragments)"),
         opt::number("pair_list_skin", &S::pair_list_skin, 0, 10, "",
                     "broad phase: pairs within this × the largest bounding radius are listed, and the list is "
                     "rebuilt only when two grains may together have moved farther; 0 = rebuilt every step (same "
