@@ -30,6 +30,7 @@ value; `crumble list` and `crumble validate` are run as given. Comments (` #` to
 a code line) are not commands.
 Exit 1 with one line per fault (FILE:LINE: what), 0 when there is none.
 """
+import fnmatch
 import json
 import os
 import re
@@ -57,7 +58,16 @@ def top_entries(root):
             return names
     except (OSError, subprocess.CalledProcessError):
         pass
-    return {n for n in os.listdir(root) if not n.startswith(".") and not n.startswith("build")}
+    # Not a git checkout (a `git archive` copy): every visible entry but those .gitignore
+    # ignores at the top level (a run's out/, the build folders).
+    ignored = []
+    try:
+        with open(os.path.join(root, ".gitignore")) as f:
+            ignored = [p.strip().strip("/") for p in f if p.strip() and not p.startswith("#")]
+    except OSError:
+        pass
+    return {n for n in os.listdir(root)
+            if not n.startswith(".") and not any(fnmatch.fnmatch(n, p) for p in ignored)}
 
 
 def documents(root):
