@@ -289,6 +289,13 @@ def self_test(binary):
         if check(t):
             print("self-test: a clean tree was reported:", check(t))
             ok = False
+        # A `git archive` copy after a run: out/ exists but .gitignore ignores it, so
+        # `out/run/series.csv` is still not a repository path.
+        os.makedirs(os.path.join(t, "out", "x"))
+        open(os.path.join(t, ".gitignore"), "w").write("build*/\n/out/\n")
+        if check(t):
+            print("self-test: a run's out/ was taken for a repository folder:", check(t))
+            ok = False
         planted = {
             "broken link": "See [gone](docs/gone.md).\n",
             "missing path": "Run `scenarios/missing.json`.\n",
