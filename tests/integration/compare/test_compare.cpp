@@ -119,11 +119,15 @@ TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
     EXPECT_TRUE(s.contains("psd_d50_final_m"));
     EXPECT_TRUE(s.contains("void_ratio_at_stress_1e+06_Pa"));
     // No breakage with breakage.type none; the mass budget holds either way.
-    if (f.find("none") != std::string::npos) EXPECT_EQ(s.at("breakage_events").get<int>(), 0);
+    if (f.find("none") != std::string::npos) {
+      EXPECT_EQ(s.at("breakage_events").get<int>(), 0);
+    }
     EXPECT_NEAR(s.at("mass_final_kg").get<double>() + s.at("mass_removed_kg").get<double>(),
                 s.at("mass_initial_kg").get<double>(), 1e-12 * s.at("mass_initial_kg").get<double>());
   }
-  if (e_relaxed_from >= 0) EXPECT_NEAR(e_relaxed_from, e0, 1e-9 * e0);  // relaxed from the shared file
+  if (e_relaxed_from >= 0) {
+    EXPECT_NEAR(e_relaxed_from, e0, 1e-9 * e0);  // relaxed from the shared file
+  }
   // The packing stage ran once and its packing.json is the one shared.
   EXPECT_EQ(crumble::file_sha256((out / "packing" / "packing.json").string()), hash);
 
