@@ -12,12 +12,18 @@
 
 namespace crumble {
 
-CpuLoad current_cpu_load() {
-  CpuLoad l;
-  l.cpus = std::max(1u, std::thread::hardware_concurrency());
+int usable_cpus() {
 #if defined(__linux__)
   cpu_set_t set;
-  if (sched_getaffinity(0, sizeof(set), &set) == 0) l.cpus = std::max(1, CPU_COUNT(&set));
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+#endif
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+CpuLoad current_cpu_load() {
+  CpuLoad l;
+  l.cpus = usable_cpus();
+#if defined(__linux__)
   std::ifstream stat("/proc/stat");
   std::string key;
   long value = 0;

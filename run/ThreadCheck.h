@@ -15,6 +15,9 @@ struct CpuLoad {
   bool wait_policy_set = false;  // OMP_WAIT_POLICY or GOMP_SPINCOUNT in the environment
 };
 
+// The CPUs this process may run on (Linux: its affinity mask; elsewhere the standard library's count).
+int usable_cpus();
+
 // The machine as it is now (Linux; elsewhere: cpus from the standard library, nothing running).
 CpuLoad current_cpu_load();
 

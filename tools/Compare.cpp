@@ -27,6 +27,7 @@
 #include "output/Plots.h"
 #include "output/Recorders.h"
 #include "run/RunPipeline.h"
+#include "run/ThreadCheck.h"
 #include "tools/TableCells.h"
 #include "output/OutputReference.h"
 #include "output/Writers.h"
@@ -699,7 +700,7 @@ int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
 // CPUs (OpenMP threads spin at every barrier while another process holds their CPU).
 CompareRequest with_threads_per_job(CompareRequest req) {
   if (!req.threads && req.jobs > 1)
-    req.threads = std::max(1, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) / req.jobs);
+    req.threads = std::max(1, usable_cpus() / req.jobs);
   return req;
 }
 

@@ -86,6 +86,9 @@ struct CompareOutcome {
   std::vector<ComparisonRow> rows;
   std::string packing_hash;  // empty when the scene builds its packing in each combination
 };
+// The request with --threads filled in for --jobs N > 1 when not given: cores / N each (at least 1).
+CompareRequest with_threads_per_job(CompareRequest req);
+
 CompareOutcome compare_runs(const CompareRequest& req);
 
 }  // namespace crumble

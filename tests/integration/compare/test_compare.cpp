@@ -4,6 +4,7 @@
 // anything runs; and the pieces it is made of (--vary parsing, SHA-256).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "crumble_config.h"
 #include "tools/Compare.h"
 #include "run/RunPipeline.h"
+#include "run/ThreadCheck.h"
 #include "output/Writers.h"
 #include "tests/support/CliRunner.h"
 
@@ -184,6 +186,22 @@ TEST(Compare, TwoEnginesTimesTwoModelsFromOnePacking) {
                                " --vary engine.type=lsdem --threads 1 --quiet");
   EXPECT_EQ(again_r.status, 2) << again_r.output;
   EXPECT_NE(again_r.output.find("not empty"), std::string::npos) << again_r.output;
+}
+
+// --jobs N without --threads: each run gets the usable CPUs / N threads (at least one); a
+// given --threads and a single job are left as they are.
+TEST(Compare, JobsShareTheCpusWhenThreadsAreNotGiven) {
+  crumble::CompareRequest req;
+  req.jobs = 2;
+  ASSERT_TRUE(crumble::with_threads_per_job(req).threads.has_value());
+  EXPECT_EQ(*crumble::with_threads_per_job(req).threads, std::max(1, crumble::usable_cpus() / 2));
+  req.jobs = 1000;
+  EXPECT_EQ(*crumble::with_threads_per_job(req).threads, 1);
+  req.threads = 3;
+  EXPECT_EQ(*crumble::with_threads_per_job(req).threads, 3);
+  req.threads.reset();
+  req.jobs = 1;
+  EXPECT_FALSE(crumble::with_threads_per_job(req).threads.has_value());
 }
 
 TEST(Compare, AGuardFailureIsARowNotAnAbort) {
