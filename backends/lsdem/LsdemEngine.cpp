@@ -1075,6 +1075,10 @@ void LsdemEngine::integrate(double dt) {
     }
     M = platen_mass(container_, M, s_.mass_scale);
     platen_.advance(dt, platen_force_, M, s_.global_damping);
+    // Relaxing, a platen the grains no longer push does not fly on upwards: the overlaps'
+    // energy that launched it is what the relaxation removes (left to fly, it rose 45 mm
+    // above the quick Zhu & Zhao packing and took 0.4 s to fall back under the settling stress).
+    if (relax_damping_ > 0 && !(platen_force_ > 0) && platen_.velocity() > 0) platen_.sync(platen_.position(), 0.0);
   }
 }
 
