@@ -155,60 +155,53 @@ def closed_form_force(strength_pa, d):
     return math.pi * d * d * strength_pa / 6
 
 
-def check_builders_agree(runs):
+SERIES_COLUMNS = ("step", "platen_force_N", "floor_force_N", "platen_height_m")
+
+
+def same_series(a, b, rows):
+    """The first `rows` samples of two runs' series.csv agree (step, forces, platen height)."""
+    return [[r[c] for c in SERIES_COLUMNS] for r in a["series"][:rows]] == \
+        [[r[c] for c in SERIES_COLUMNS] for r in b["series"][:rows]]
+
+
+def check_same_runs(runs):
+    """The builders act only on the split that ends a run, and an engine's two models run the
+    same steps until the stress model's split: say so on stderr where that does not hold."""
     for eng in ENGINES:
         for mod in MODELS:
             a, b = runs.get((eng, mod, BUILDERS[0])), runs.get((eng, mod, BUILDERS[1]))
-            if not a or not b:
-                continue
-            fa = [(r["step"], r["platen_force_N"], r["floor_force_N"]) for r in a["series"]]
-            fb = [(r["step"], r["platen_force_N"], r["floor_force_N"]) for r in b["series"]]
-            if fa != fb:
-                print(f"note: {eng} {mod}: the builders' series differ before the split", file=sys.stderr)
-
-
-def check_models_agree(runs):
-    """Before the stress model's split, an engine's two models must have run the same steps."""
-    cols = ("step", "platen_force_N", "floor_force_N", "platen_height_m")
-    for eng in ENGINES:
+            if a and b and not same_series(a, b, len(a["series"])):
+                print(f"note: {eng} {mod}: the builders' series differ", file=sys.stderr)
         a, b = runs.get((eng, "stress", BUILDERS[0])), runs.get((eng, "peridynamics", BUILDERS[0]))
-        if not a or not b:
-            continue
-        n = len(a["series"]) - 1
-        if [[r[c] for c in cols] for r in a["series"][:n]] != [[r[c] for c in cols] for r in b["series"][:n]]:
+        if a and b and not same_series(a, b, len(a["series"]) - 1):
             print(f"note: {eng}: the two models' series differ before the stress model's split", file=sys.stderr)
 
 
+def print_table(runs, header, cells):
+    """One Markdown row per combination that ran: engine, model, builder, then cells(figures)."""
+    print("| engine | model | builder | " + " | ".join(header) + " |")
+    print("|---|---|---|" + "---|" * len(header))
+    for eng in ENGINES:
+        for mod in MODELS:
+            for bld in BUILDERS:
+                run = runs.get((eng, mod, bld))
+                if run:
+                    print(f"| {eng} | {mod} | {bld} | " + " | ".join(cells(figures(run))) + " |")
+
+
 def print_tables(runs, every_step, strength, d):
-    print("| engine | model | builder | crushing force N | platen force at the check N | commanded N "
-          "| platen stress MPa | axial strain % | fragments | largest fragment % | removed % | fallbacks | wall s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for eng in ENGINES:
-        for mod in MODELS:
-            for bld in BUILDERS:
-                run = runs.get((eng, mod, bld))
-                if not run:
-                    print(f"| {eng} | {mod} | {bld} | not run | | | | | | | | | |")
-                    continue
-                f = figures(run)
-                print(f"| {eng} | {mod} | {bld} | {f['force']:.1f} | {f['platen_force']:.1f} | {f['commanded_force']:.1f} "
-                      f"| {f['platen_stress'] / 1e6:.2f} | {100 * f['strain']:.3f} | {f['fragments']} "
-                      f"| {100 * f['largest']:.1f} | {100 * f['removed']:.2f} | {f['fallbacks']} | {f['wall']:.1f} |")
+    print_table(runs, ["crushing force N", "platen force at the check N", "commanded N", "platen stress MPa",
+                       "axial strain %", "fragments", "largest fragment %", "removed %", "fallbacks", "wall s"],
+                lambda f: [f"{f['force']:.1f}", f"{f['platen_force']:.1f}", f"{f['commanded_force']:.1f}",
+                           f"{f['platen_stress'] / 1e6:.2f}", f"{100 * f['strain']:.3f}", f"{f['fragments']}",
+                           f"{100 * f['largest']:.1f}", f"{100 * f['removed']:.2f}", f"{f['fallbacks']}",
+                           f"{f['wall']:.1f}"])
     print()
-    print("| engine | model | builder | steps | analyses | screened out unbalanced | analyses s | fragments s "
-          "| engine s | output s | mass budget (final + removed − initial) / initial |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for eng in ENGINES:
-        for mod in MODELS:
-            for bld in BUILDERS:
-                run = runs.get((eng, mod, bld))
-                if not run:
-                    continue
-                f = figures(run)
-                t = f["times"]
-                print(f"| {eng} | {mod} | {bld} | {f['steps']} | {f['analyses']} | {int(f['unbalanced'])} "
-                      f"| {t.get('analyses', 0):.2f} | {t.get('fragments', 0):.2f} | {t.get('engine', 0):.2f} "
-                      f"| {t.get('output', 0):.2f} | {f['budget']:.1e} |")
+    print_table(runs, ["steps", "analyses", "screened out unbalanced", "analyses s", "fragments s", "engine s",
+                       "output s", "mass budget (final + removed − initial) / initial"],
+                lambda f: [f"{f['steps']}", f"{f['analyses']}", f"{int(f['unbalanced'])}"] +
+                [f"{f['times'].get(k, 0):.2f}" for k in ("analyses", "fragments", "engine", "output")] +
+                [f"{f['budget']:.1e}"])
     print()
     print(f"closed form of the stress model: F = π d² σ0 / 6 = {closed_form_force(strength, d):.2f} N "
           f"(σ0 = {strength / 1e6:g} MPa, d = {d * 1e3:g} mm)")
@@ -346,8 +339,7 @@ def main():
     if not runs:
         sys.exit("plot-methods-compared: no run finished in " + a.out)
     every = load_by_engine(a.every_step) if a.every_step else {}
-    check_builders_agree(runs)
-    check_models_agree(runs)
+    check_same_runs(runs)
     any_run = next(iter(runs.values()))
     d = any_run["summary"]["diameter_m"]
     stress_run = next((r for k, r in runs.items() if k[1] == "stress"), None)
