@@ -67,6 +67,11 @@ const OptionTable& stress_options() {
                     "each side of the fracture plane holds at least the volume (2D: area) of a sphere (disc) of "
                     "this diameter, and a grain of less than twice that is not broken (outcome too_small): Harmon "
                     "et al. 2020 §3.4, first method, breakage halted at a minimum size; 0 = off"),
+        opt::number("min_piece_thickness", &S::min_piece_thickness, 0, 1, "m",
+                    "each side of the fracture plane reaches at least this far from it along its normal, and a "
+                    "grain less than twice that thick along the normal is not broken (outcome too_small): "
+                    "min_piece_diameter by thickness, so that a long slab is not cut along its length into a "
+                    "strip its grid cannot resolve (Harmon et al. 2020 §3.4, first method; ours); 0 = off"),
         opt::choice("plane_fallback", &S::plane_fallback, {"centroid", "shift"},
                     "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
                     "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
@@ -223,6 +228,17 @@ CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, doub
   return out;
 }
 
+std::optional<CutPlane> keep_piece_thickness(const Shape& shape, const CutPlane& plane, double thickness) {
+  if (!(thickness > 0)) return plane;
+  const std::vector<double> h = inside_heights(shape, plane.normal);
+  if (h.empty()) return plane;
+  const double lo = h.front() + thickness, hi = h.back() - thickness;
+  if (lo > hi) return std::nullopt;
+  CutPlane out = plane;
+  out.offset = std::clamp(plane.offset, lo, hi);
+  return out;
+}
+
 // ---------------------------------------------------------------- the model
 
 StressModel::StressModel(StressOptions o, int dimension)
@@ -373,10 +389,12 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   a.set_figure("plane_through_centroid", centroid_fallback ? 1.0 : 0.0);
   // §3.3 fixes the plane's orientation by the contacts (eqs. 18–20); its offset is kept
   // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction,
-  // min_piece_diameter).
-  const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, fraction);
+  // min_piece_diameter, min_piece_thickness).
+  const auto cut = keep_piece_thickness(*g.shape, clamp_plane_to_interior(*g.shape, *plane, fraction),
+                                        o_.min_piece_thickness);
+  if (!cut) return finish("too_small");
   a.broken = true;
-  a.fracture = CuttingSurfaces{{cut}};
+  a.fracture = CuttingSurfaces{{*cut}};
   return finish("split");
 }
 

@@ -58,6 +58,12 @@ struct StressOptions {
   // does with a fraction; a grain of less than twice that volume is not broken (outcome
   // too_small). 0 = off.
   double min_piece_diameter = 0;
+  // "min_piece_thickness" (m): the same first way, by thickness instead of volume. After the
+  // moves above, the plane is moved along its normal until each side reaches at least this
+  // far from it (the side's extent along the normal); a grain less than twice that thick
+  // along the normal is not broken (outcome too_small). A volume alone lets a long slab be
+  // cut along its length into a strip thinner than its grid resolves (our decision). 0 = off.
+  double min_piece_thickness = 0;
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
 };
@@ -99,6 +105,12 @@ std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Ve
 // fraction must be < 0.5.
 CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction);
 
+// `plane` moved along its normal so that each side reaches at least `thickness` from it (the
+// extent along the normal of the lattice of clamp_plane_to_interior, cell centres inside the
+// shape); std::nullopt when the shape is less than twice that thick along the normal. A plane
+// that already satisfies it, one that misses the shape, or thickness <= 0: unchanged.
+std::optional<CutPlane> keep_piece_thickness(const Shape& shape, const CutPlane& plane, double thickness);
+
 // The smaller of the two volume fractions (2D: areas) on either side of `plane`, on the
 // lattice of clamp_plane_to_interior; 0 when the plane misses the shape.
 double smaller_side_fraction(const Shape& shape, const CutPlane& plane);
@@ -112,7 +124,7 @@ class StressModel final : public BreakageModel {
   // Outcomes: split (broken, a CuttingSurfaces with one plane), intact, no_load (no contact
   // carries force), single_contact (3D: one partner; held off, §3.3), degenerate_contacts
   // (the contacts fix no plane), too_small (failed, but less than two pieces of
-  // min_piece_diameter). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
+  // min_piece_diameter or min_piece_thickness). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
   // equivalent_stress_Pa, strength_Pa (and tensile_strength_Pa for max_principal),
   // plane_through_centroid (1 when StressOptions::plane_fallback replaced the plane).
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
