@@ -60,9 +60,11 @@ struct StressOptions {
   double min_piece_diameter = 0;
   // "min_piece_thickness" (m): the same first way, by thickness instead of volume. After the
   // moves above, the plane is moved along its normal until each side reaches at least this
-  // far from it (the side's extent along the normal); a grain less than twice that thick
-  // along the normal is not broken (outcome too_small). A volume alone lets a long slab be
-  // cut along its length into a strip thinner than its grid resolves (our decision). 0 = off.
+  // far from it (the side's extent along the normal). A grain less than twice that thick
+  // along the normal is cut across instead in 2D (through its centroid, perpendicular to the
+  // plane, with the same limits), and is not broken (outcome too_small) when that fails too
+  // or in 3D. A volume alone lets a long slab loaded at its two ends be cut along its length,
+  // again and again, into strips thinner than its grid resolves (our decision). 0 = off.
   double min_piece_thickness = 0;
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
@@ -148,6 +150,9 @@ class StressModel final : public BreakageModel {
   // The smallest fraction of g's volume each side of the plane must hold: min_piece_fraction,
   // or more by min_piece_diameter; >= 0.5 when g cannot give two such pieces.
   double piece_fraction(const Shape& g) const;
+  static std::vector<const Contact*> strongest_first(const std::vector<Contact>& loaded);
+  std::optional<CutPlane> place_plane(const Shape& shape, CutPlane plane, const std::vector<Vec3>& pts,
+                                      const Vec3& f_body, double fraction, bool& centroid_fallback) const;
 };
 
 std::unique_ptr<BreakageModel> make_stress(const Config& cfg, const EngineContext& ctx);

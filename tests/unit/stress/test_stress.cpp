@@ -450,7 +450,8 @@ TEST(StressModel, MinPieceDiameterMovesThePlaneAndHaltsBreakageOfSmallGrains) {
 // by two weaker ones below. min_piece_fraction alone moves the plane to the 10 % band, a strip
 // 0.6 mm thick; with a thickness of 2 mm each side reaches at least 2 mm from the plane
 // (offset at most 1 mm below the top face's 3 mm, within a lattice cell of 6/64 mm); with
-// 3.1 mm the slab (6 mm) cannot give two such pieces (too_small). A plane across the slab
+// 3.1 mm the slab (6 mm) cannot give two such pieces along its length and is cut across,
+// through its centroid; with 51 mm not that way either (too_small). A plane across the slab
 // (extent 100 mm along its normal) is left where it is.
 TEST(StressModel, MinPieceThicknessKeepsALongSlabFromBeingCutIntoAStrip) {
   const double a = 0.05, b = 0.003, P = 1e5;
@@ -479,7 +480,13 @@ TEST(StressModel, MinPieceThicknessKeepsALongSlabFromBeingCutIntoAStrip) {
   EXPECT_NEAR(std::abs(p1.normal.y), 1.0, 1e-9);
   EXPECT_LE(std::abs(p1.offset), b - 0.002 + 1e-12);
   EXPECT_GE(std::abs(p1.offset), b - 0.002 - 2 * b / 64);
-  const auto none = cut_with(0.0031);
+  const auto across_cut = cut_with(0.0031);
+  ASSERT_TRUE(across_cut.broken) << across_cut.outcome;
+  const CutPlane p2 = std::get<CuttingSurfaces>(*across_cut.fracture).planes.at(0);
+  EXPECT_NEAR(std::abs(p2.normal.x), 1.0, 1e-9);
+  EXPECT_NEAR(p2.offset, 0.0, 1e-12);
+  EXPECT_NEAR(smaller_side_fraction(*g.shape, p2), 0.5, 0.02);
+  const auto none = cut_with(0.051);
   EXPECT_FALSE(none.broken);
   EXPECT_EQ(none.outcome, "too_small");
   EXPECT_FALSE(none.fracture);
