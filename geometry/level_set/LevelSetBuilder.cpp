@@ -255,9 +255,9 @@ const OptionTable& level_set_options() {
                     "a piece smaller than this × the parent's volume is removed (counted)"),
         opt::number("cells_across", &S::cells_across, 0, 1000, "",
                     "grid cells across a child's thickness (twice its deepest inside distance): each child is "
-                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §3.4, second "
-                    "method; the count is ours; measured in docs/validation.md); 0 = off: children keep the parent's "
-                    "lattice and no split is refined"),
+                    "resampled at its own spacing, never coarser than its parent's nor finer than resolve_diameter / "
+                    "cells_across (Harmon et al. 2020 §3.4, second method; the count is ours; measured in "
+                    "docs/validation.md); 0 = off: children keep the parent's lattice and no split is refined"),
         opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",
                     "a split that removes a piece its grid cannot resolve is repeated on grids of half the spacing, "
                     "down to this / cells_across; 0 = simulation.fines_diameter (no refinement when that is 0 too)"),
