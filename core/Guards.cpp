@@ -67,12 +67,14 @@ double kinetic_energy(std::span<const Grain> grains, std::span<const Material> m
 
 namespace {
 
-// An open scene's grain outside the domain other than through its bottom (grains below the
-// domain have left as product before this check).
+// An open scene's grain outside the domain other than through its bottom. A grain below the
+// bottom is leaving through the discharge (Container): the Simulation takes it out as product
+// at its next sample step, and the check after the last step comes before that.
 void check_in_domain(const GuardContext& at, const Container& box, int dimension, const Grain& g) {
-  const bool out = g.position.x < box.domain.lo.x || g.position.x > box.domain.hi.x ||
-                   g.position.y < box.domain.lo.y || g.position.y > box.domain.hi.y ||
-                   (dimension == 3 && (g.position.z < box.domain.lo.z || g.position.z > box.domain.hi.z));
+  const int up = dimension == 3 ? 2 : 1;
+  bool out = false;
+  for (int a = 0; a < dimension; ++a)
+    out = out || g.position[a] > box.domain.hi[a] || (a != up && g.position[a] < box.domain.lo[a]);
   if (!out) return;
   std::ostringstream os;
   os << "grain " << g.id << " (d = " << g.shape->equivalent_diameter() << " m) has its centroid at ("

@@ -67,6 +67,12 @@ const OptionTable& stress_options() {
                     "each side of the fracture plane holds at least the volume (2D: area) of a sphere (disc) of "
                     "this diameter, and a grain of less than twice that is not broken (outcome too_small): Harmon "
                     "et al. 2020 §3.4, first method, breakage halted at a minimum size; 0 = off"),
+        opt::number("min_piece_thickness", &S::min_piece_thickness, 0, 1, "m",
+                    "each side of the fracture plane reaches at least this far from it along its normal; a grain "
+                    "less than twice that thick along the normal is cut across instead (2D: through its centroid, "
+                    "perpendicular to the plane) or, when that fails too or in 3D, not broken (outcome too_small): "
+                    "min_piece_diameter by thickness, so that a long slab is not cut along its length into strips "
+                    "its grid cannot resolve (Harmon et al. 2020 §3.4, first method; ours); 0 = off"),
         opt::choice("plane_fallback", &S::plane_fallback, {"centroid", "shift"},
                     "when the plane through the contacts leaves less than min_piece_fraction on one side: centroid = "
                     "the centroid replaces the weakest point first (Harmon et al. 2020 §3.3 fill-in), the shift only "
@@ -223,6 +229,17 @@ CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, doub
   return out;
 }
 
+std::optional<CutPlane> keep_piece_thickness(const Shape& shape, const CutPlane& plane, double thickness) {
+  if (!(thickness > 0)) return plane;
+  const std::vector<double> h = inside_heights(shape, plane.normal);
+  if (h.empty()) return plane;
+  const double lo = h.front() + thickness, hi = h.back() - thickness;
+  if (lo > hi) return std::nullopt;
+  CutPlane out = plane;
+  out.offset = std::clamp(plane.offset, lo, hi);
+  return out;
+}
+
 // ---------------------------------------------------------------- the model
 
 StressModel::StressModel(StressOptions o, int dimension)
@@ -334,7 +351,29 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   if (loaded.empty()) return finish("no_load");
   if (!criterion_->fails(p, g.strength)) return finish("intact");
 
-  // §3.3: one point per contact partner, the point of its strongest contact; strongest first.
+  const std::vector<const Contact*> order = strongest_first(loaded);
+  if (dim_ == 3 && order.size() < 2) return finish("single_contact");  // held off until a second contact
+
+  const double fraction = piece_fraction(*g.shape);
+  if (fraction >= 0.5) return finish("too_small");
+  const std::size_t need = dim_ == 3 ? 3 : 2;
+  std::vector<Vec3> pts;
+  for (std::size_t i = 0; i < order.size() && i < need; ++i) pts.push_back(g.to_local(order[i]->point));
+  const Vec3 f_body = g.orientation.conjugate().rotate(order.front()->force);
+  const auto plane = fracture_plane(pts, f_body, dim_, g.shape->equivalent_diameter());
+  if (!plane) return finish("degenerate_contacts");
+  bool centroid_fallback = false;
+  const auto cut = place_plane(*g.shape, *plane, pts, f_body, fraction, centroid_fallback);
+  a.set_figure("plane_through_centroid", centroid_fallback ? 1.0 : 0.0);
+  if (!cut) return finish("too_small");
+  a.broken = true;
+  a.fracture = CuttingSurfaces{{*cut}};
+  return finish("split");
+}
+
+// The strongest first of §3.3's points, one per contact partner (the point of its strongest
+// contact).
+std::vector<const Contact*> StressModel::strongest_first(const std::vector<Contact>& loaded) {
   std::map<long, const Contact*> strongest;
   for (const auto& c : loaded) {
     const long key = c.is_wall() ? -2 - static_cast<long>(c.wall) : static_cast<long>(c.b);
@@ -345,39 +384,39 @@ BreakageAnalysis StressModel::analyse(const Grain& g, const Material&, std::span
   for (const auto& [k, c] : strongest) order.push_back(c);
   std::stable_sort(order.begin(), order.end(),
                    [](const Contact* x, const Contact* y) { return norm2(x->force) > norm2(y->force); });
-  if (dim_ == 3 && order.size() < 2) return finish("single_contact");  // held off until a second contact
+  return order;
+}
 
-  const double fraction = piece_fraction(*g.shape);
-  if (fraction >= 0.5) return finish("too_small");
-  const std::size_t need = dim_ == 3 ? 3 : 2;
-  std::vector<Vec3> pts;
-  for (std::size_t i = 0; i < order.size() && i < need; ++i) pts.push_back(g.to_local(order[i]->point));
-  const Vec3 f_body = g.orientation.conjugate().rotate(order.front()->force);
-  auto plane = fracture_plane(pts, f_body, dim_, g.shape->equivalent_diameter());
-  if (!plane) return finish("degenerate_contacts");
+// The cut of a failed grain from the plane through its contacts; std::nullopt when the grain
+// cannot give two pieces of the minimum size (too_small).
+std::optional<CutPlane> StressModel::place_plane(const Shape& shape, CutPlane plane, const std::vector<Vec3>& pts,
+                                                 const Vec3& f_body, double fraction, bool& centroid_fallback) const {
   // The strongest contacts along one face (a flat grain wedged by its two corners, three
   // contacts around one pole) put the plane through the contacts (eqs. 18–20) along the
   // surface: it would shave a sliver. The centroid then takes the weakest point's place,
   // as §3.3 lets it fill in for a missing contact (our reading; plane_fallback "centroid").
   // Only if that fails too is the plane shifted (min_piece_fraction, below).
-  bool centroid_fallback = false;
+  const std::size_t need = dim_ == 3 ? 3 : 2;
   if (o_.plane_fallback == "centroid" && fraction > 0 && pts.size() == need &&
-      smaller_side_fraction(*g.shape, *plane) < fraction) {
+      smaller_side_fraction(shape, plane) < fraction) {
     const std::vector<Vec3> fewer(pts.begin(), pts.end() - 1);
-    const auto alt = fracture_plane(fewer, f_body, dim_, g.shape->equivalent_diameter());
-    if (alt && smaller_side_fraction(*g.shape, *alt) >= fraction) {
-      plane = alt;
+    const auto alt = fracture_plane(fewer, f_body, dim_, shape.equivalent_diameter());
+    if (alt && smaller_side_fraction(shape, *alt) >= fraction) {
+      plane = *alt;
       centroid_fallback = true;
     }
   }
-  a.set_figure("plane_through_centroid", centroid_fallback ? 1.0 : 0.0);
   // §3.3 fixes the plane's orientation by the contacts (eqs. 18–20); its offset is kept
   // inside the grain so that both pieces are meaningful (StressOptions::min_piece_fraction,
-  // min_piece_diameter).
-  const CutPlane cut = clamp_plane_to_interior(*g.shape, *plane, fraction);
-  a.broken = true;
-  a.fracture = CuttingSurfaces{{cut}};
-  return finish("split");
+  // min_piece_diameter, min_piece_thickness).
+  const double t = o_.min_piece_thickness;
+  auto cut = keep_piece_thickness(shape, clamp_plane_to_interior(shape, plane, fraction), t);
+  if (cut || dim_ != 2) return cut;
+  // 2D, a grain thinner than 2t along the normal (a slab loaded at its two ends, which the
+  // plane through the contacts would split along its length): cut across it instead, through
+  // its centroid (the body origin) perpendicular to that plane (ours).
+  const CutPlane across{{-plane.normal.y, plane.normal.x, 0}, 0.0};
+  return keep_piece_thickness(shape, clamp_plane_to_interior(shape, across, fraction), t);
 }
 
 double StressModel::piece_fraction(const Shape& g) const {

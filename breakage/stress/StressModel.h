@@ -58,6 +58,14 @@ struct StressOptions {
   // does with a fraction; a grain of less than twice that volume is not broken (outcome
   // too_small). 0 = off.
   double min_piece_diameter = 0;
+  // "min_piece_thickness" (m): the same first way, by thickness instead of volume. After the
+  // moves above, the plane is moved along its normal until each side reaches at least this
+  // far from it (the side's extent along the normal). A grain less than twice that thick
+  // along the normal is cut across instead in 2D (through its centroid, perpendicular to the
+  // plane, with the same limits), and is not broken (outcome too_small) when that fails too
+  // or in 3D. A volume alone lets a long slab loaded at its two ends be cut along its length,
+  // again and again, into strips thinner than its grid resolves (our decision). 0 = off.
+  double min_piece_thickness = 0;
   // "min_contacts" of the default screening: 2D 1 (one contact + the centroid make a line,
   // §3.3), 3D 2 (a single 3D contact holds breakage off anyway).
 };
@@ -99,6 +107,12 @@ std::optional<CutPlane> fracture_plane(const std::vector<Vec3>& points, const Ve
 // fraction must be < 0.5.
 CutPlane clamp_plane_to_interior(const Shape& shape, const CutPlane& plane, double fraction);
 
+// `plane` moved along its normal so that each side reaches at least `thickness` from it (the
+// extent along the normal of the lattice of clamp_plane_to_interior, cell centres inside the
+// shape); std::nullopt when the shape is less than twice that thick along the normal. A plane
+// that already satisfies it, one that misses the shape, or thickness <= 0: unchanged.
+std::optional<CutPlane> keep_piece_thickness(const Shape& shape, const CutPlane& plane, double thickness);
+
 // The smaller of the two volume fractions (2D: areas) on either side of `plane`, on the
 // lattice of clamp_plane_to_interior; 0 when the plane misses the shape.
 double smaller_side_fraction(const Shape& shape, const CutPlane& plane);
@@ -112,7 +126,7 @@ class StressModel final : public BreakageModel {
   // Outcomes: split (broken, a CuttingSurfaces with one plane), intact, no_load (no contact
   // carries force), single_contact (3D: one partner; held off, §3.3), degenerate_contacts
   // (the contacts fix no plane), too_small (failed, but less than two pieces of
-  // min_piece_diameter). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
+  // min_piece_diameter or min_piece_thickness). Figures: sigma_1_Pa >= sigma_2_Pa (>= sigma_3_Pa in 3D),
   // equivalent_stress_Pa, strength_Pa (and tensile_strength_Pa for max_principal),
   // plane_through_centroid (1 when StressOptions::plane_fallback replaced the plane).
   BreakageAnalysis analyse(const Grain& g, const Material& m, std::span<const Contact> contacts) const override;
@@ -136,6 +150,9 @@ class StressModel final : public BreakageModel {
   // The smallest fraction of g's volume each side of the plane must hold: min_piece_fraction,
   // or more by min_piece_diameter; >= 0.5 when g cannot give two such pieces.
   double piece_fraction(const Shape& g) const;
+  static std::vector<const Contact*> strongest_first(const std::vector<Contact>& loaded);
+  std::optional<CutPlane> place_plane(const Shape& shape, CutPlane plane, const std::vector<Vec3>& pts,
+                                      const Vec3& f_body, double fraction, bool& centroid_fallback) const;
 };
 
 std::unique_ptr<BreakageModel> make_stress(const Config& cfg, const EngineContext& ctx);

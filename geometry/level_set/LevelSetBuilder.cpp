@@ -83,6 +83,15 @@ SplitResult moved_cut(const LevelSetGrid& phi1, const CutPlane& p, const SplitOp
   return split_by_planes(phi1, {{p.normal, std::clamp(p.offset, hmin + m, hmax - m)}}, so);
 }
 
+// A split that is not made (fines_policy "halt"): no child, no removed volume, unresolved.
+FragmentResult left_whole(int refinements) {
+  FragmentResult whole;
+  whole.method = "level_set_unresolved";
+  whole.unresolved = true;
+  whole.refinements = refinements;
+  return whole;
+}
+
 // The spacing that keeps a grid over `box` (plus 3 cells each side) at most `max_nodes` nodes.
 double capped_spacing(double h, const Aabb& box, int dim, long max_nodes) {
   for (int it = 0; it < 60; ++it) {
@@ -117,16 +126,19 @@ SplitResult LevelSetBuilder::refined_split(const LevelSetGrid& phi1, const Fract
 }
 
 // A child's grid at its own spacing: its thickness (twice its deepest inside distance) /
-// cells_across, never coarser than `coarsest`, within the max_grid_nodes cap; surface nodes
-// at `node_ratio` × the spacing.
+// cells_across, never finer than resolve_diameter / cells_across (the finest grid a split is
+// refined to: a sliver thinner than resolve_diameter, e.g. a long slab, would otherwise get a
+// grid of hundreds of thousands of nodes along its length) and never coarser than
+// `coarsest`, within the max_grid_nodes cap; surface nodes at `node_ratio` × the spacing.
 std::shared_ptr<const LevelSetGrid> LevelSetBuilder::own_resolution(const std::shared_ptr<const LevelSetGrid>& g,
                                                                     double coarsest, double node_ratio) const {
   if (!(opt_.cells_across > 0)) return g;
   const double depth = -*std::min_element(g->values().begin(), g->values().end());
   Aabb box;
   for (const auto& x : g->nodes()) box.extend(x);
-  const double h = capped_spacing(std::min(coarsest, 2 * depth / opt_.cells_across), box, g->dimension(),
-                                  opt_.max_grid_nodes);
+  const double finest = opt_.resolve_diameter / opt_.cells_across;  // 0 when resolve_diameter is 0
+  const double own = std::max(2 * depth / opt_.cells_across, finest);
+  const double h = capped_spacing(std::min(coarsest, own), box, g->dimension(), opt_.max_grid_nodes);
   if (std::abs(h - g->spacing()) <= 1e-9 * h) return g;
   try {
     return g->resampled(h, node_ratio * h);
@@ -177,16 +189,12 @@ FragmentResult LevelSetBuilder::build(const Shape& parent, const Fracture& fract
     }
     return out;
   }
+  // fines_policy "halt" (Harmon et al. 2020 §3.4, first method): a split that would leave
+  // fines is not made. A removed piece is known before the children are resampled (the
+  // costly part, and a halted grain is analysed again at the next check).
+  if (opt_.fines_policy == "halt" && sr.removed_volume > 0) return left_whole(out.refinements);
   finish_children(parent, sr, out);
-  if (leaves_fines(out)) {
-    // fines_policy "halt" (Harmon et al. 2020 §3.4, first method): a split that would leave
-    // fines is not made.
-    FragmentResult whole;
-    whole.method = "level_set_unresolved";
-    whole.unresolved = true;
-    whole.refinements = out.refinements;
-    return whole;
-  }
+  if (leaves_fines(out)) return left_whole(out.refinements);
   return out;
 }
 
@@ -247,9 +255,9 @@ const OptionTable& level_set_options() {
                     "a piece smaller than this × the parent's volume is removed (counted)"),
         opt::number("cells_across", &S::cells_across, 0, 1000, "",
                     "grid cells across a child's thickness (twice its deepest inside distance): each child is "
-                    "resampled at its own spacing, never coarser than its parent's (Harmon et al. 2020 §3.4, second "
-                    "method; the count is ours; measured in docs/validation.md); 0 = off: children keep the parent's "
-                    "lattice and no split is refined"),
+                    "resampled at its own spacing, never coarser than its parent's nor finer than resolve_diameter / "
+                    "cells_across (Harmon et al. 2020 §3.4, second method; the count is ours; measured in "
+                    "docs/validation.md); 0 = off: children keep the parent's lattice and no split is refined"),
         opt::number("resolve_diameter", &S::resolve_diameter, 0, 1, "m",
                     "a split that removes a piece its grid cannot resolve is repeated on grids of half the spacing, "
                     "down to this / cells_across; 0 = simulation.fines_diameter (no refinement when that is 0 too)"),

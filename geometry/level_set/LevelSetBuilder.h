@@ -37,9 +37,11 @@
 //   a cut that leaves no grid node on one side) is repeated on the parent resampled at half
 //   the spacing, down to resolve_diameter / cells_across (and the max_grid_nodes cap);
 // - every child is resampled at its own spacing: its thickness (twice its deepest inside
-//   distance) / cells_across, never coarser than the parent's grid, its surface nodes at the
-//   parent's node spacing per grid spacing; a child finer than resolve_diameter (which the run
-//   removes as fines) keeps the grid it was cut on.
+//   distance) / cells_across, never coarser than the parent's grid nor finer than
+//   resolve_diameter / cells_across (a long slab thinner than resolve_diameter keeps that
+//   grid, not one that follows its thickness), its surface nodes at the parent's node spacing
+//   per grid spacing; a child finer than resolve_diameter (which the run removes as fines)
+//   keeps the grid it was cut on.
 #pragma once
 #include <memory>
 #include <string>

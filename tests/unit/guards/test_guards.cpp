@@ -81,6 +81,28 @@ TEST(Guards, GrainOutsideTheContainerFails) {
   EXPECT_EQ(failure_of([&] { check_invariants(GuardSettings{}, ctx(), box(), 2, 0.008, gs, kMat, {}); }), "");
 }
 
+// An open scene (a jaw crusher): a grain beyond any face of the domain fails, except below its
+// bottom (the vertical axis: y in 2D, z in 3D), where it is leaving through the discharge —
+// the state after a run's last step, whose grains the Simulation has not yet taken out as
+// product when the final check runs.
+TEST(Guards, OpenSceneGrainBelowTheBottomIsLeavingThroughTheDischarge) {
+  Container open;
+  open.open = true;
+  open.domain = {{-1, -0.2, -1}, {1, 2, 1}};
+  open.height = 2.2;
+  const auto check = [&](int dim, Vec3 p) {
+    std::vector<Grain> gs{sphere_at(5, p)};
+    return failure_of([&] { check_invariants(GuardSettings{}, ctx(), open, dim, 0, gs, kMat, {}); });
+  };
+  EXPECT_EQ(check(2, {0.03, -0.2001, 0}), "");
+  EXPECT_EQ(check(3, {0.03, 0.5, -1.0001}), "");
+  for (Vec3 p : {Vec3{-1.0001, -0.15, 0}, Vec3{1.0001, 0.5, 0}, Vec3{0.03, 2.0001, 0}}) {
+    const std::string msg = check(2, p);
+    EXPECT_NE(msg.find("outside the scene's domain"), std::string::npos) << p.x << " " << p.y << ": " << msg;
+  }
+  EXPECT_NE(check(3, {0.03, -0.2001, 0}), "");  // in 3D y is a side
+}
+
 TEST(Guards, DeepOverlapFailsAndNamesTheLimit) {
   std::vector<Grain> gs{sphere_at(0, {0.002, 0.002, 0.001}), sphere_at(1, {0.003, 0.002, 0.001}, 0.5e-3)};
   Contact c;

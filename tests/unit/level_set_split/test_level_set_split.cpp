@@ -325,6 +325,52 @@ TEST(LevelSetSplit, ChildrenAreResampledAtTheirOwnSizeWithinTheNodeCap) {
   }
 }
 
+// A child thinner than resolve_diameter (a cap, a long slab) is not resampled finer than
+// resolve_diameter / cells_across, the finest grid a split is refined to: a 0.2 mm cap of a
+// 1 mm disk (segment of 0.1635 mm², d = 0.456 mm, above resolve_diameter 0.4 mm) would get
+// 2·depth / 20 ≈ 0.01 mm; it gets 0.4 mm / 20 = 0.02 mm, and its grid a quarter of the nodes.
+// Its area stays the segment's; the other child follows its own thickness as before.
+TEST(LevelSetSplit, ThinChildIsNotResampledFinerThanTheRefinementFloor) {
+  const auto parent = Shape::disk(kR, {1, kH, 0});
+  const double c = kR - 2 * kH;
+  const CuttingSurfaces cut{{{{1, 0, 0}, c}}};
+  const double segment = kR * kR * std::acos(c / kR) - c * std::sqrt(kR * kR - c * c);
+  LevelSetBuilderOptions o;
+  o.cells_across = 20;
+  o.resolve_diameter = 0.4e-3;
+  const FragmentResult fr = LevelSetBuilder(o).build(*parent, cut);
+  ASSERT_EQ(fr.children.size(), 2u) << fr.method;
+  EXPECT_EQ(fr.removed_volume, 0.0);
+  EXPECT_LT(budget_error(fr, parent->volume()), 1e-9);
+  auto cap_of = [](const FragmentResult& r) -> const LevelSetGrid& {
+    const auto& a = r.children[0].shape, &b = r.children[1].shape;
+    return (a->volume() < b->volume() ? a : b)->level_set();
+  };
+  const LevelSetGrid& cap = cap_of(fr);
+  // (The children's grids are scaled by k^(1/2) ≈ 1 for the mass budget.)
+  EXPECT_NEAR(cap.spacing() / (o.resolve_diameter / o.cells_across), 1.0, 0.01);
+  // Cut on the parent's grid (2 cells across the cap, no refinement needed) and resampled
+  // from it: the segment's area within the coarse cut's error.
+  EXPECT_NEAR(cap.mass_properties().volume / segment, 1.0, 0.2);
+  const auto n = cap.counts();
+  for (const auto& ch : fr.children) {
+    const LevelSetGrid& g = ch.shape->level_set();
+    if (&g == &cap) continue;
+    const double depth = -*std::min_element(g.values().begin(), g.values().end());
+    EXPECT_NEAR(2 * depth / g.spacing(), 20.0, 2.0);
+  }
+  // Without the floor (resolve_diameter below the cap's own spacing × 20) the cap follows its
+  // thickness: about half the spacing, about four times the nodes.
+  o.resolve_diameter = 0.1e-3;
+  const FragmentResult fine = LevelSetBuilder(o).build(*parent, cut);
+  ASSERT_EQ(fine.children.size(), 2u);
+  const LevelSetGrid& fine_cap = cap_of(fine);
+  EXPECT_LT(fine_cap.spacing(), 0.7 * cap.spacing());
+  EXPECT_NEAR(fine_cap.mass_properties().volume / cap.mass_properties().volume, 1.0, 0.02);
+  const auto m = fine_cap.counts();
+  EXPECT_GT(m[0] * m[1], 2 * n[0] * n[1]);
+}
+
 TEST(LevelSetSplit, ResampledGridKeepsTheZeroLevel) {
   const auto g = disk_grid();
   const auto fine = g->resampled(0.5 * kH, 0);

@@ -445,6 +445,59 @@ TEST(StressModel, MinPieceDiameterMovesThePlaneAndHaltsBreakageOfSmallGrains) {
   EXPECT_NEAR(smaller_side_fraction(*g.shape, std::get<CuttingSurfaces>(*j.fracture).planes.at(0)), 0.5, 0.03);
 }
 
+// min_piece_thickness: a 2D slab 100 × 6 mm pressed on its top face by two equal contacts
+// (the line through them runs along the face, plane_fallback "shift" keeps it so) and held
+// by two weaker ones below. min_piece_fraction alone moves the plane to the 10 % band, a strip
+// 0.6 mm thick; with a thickness of 2 mm each side reaches at least 2 mm from the plane
+// (offset at most 1 mm below the top face's 3 mm, within a lattice cell of 6/64 mm); with
+// 3.1 mm the slab (6 mm) cannot give two such pieces along its length and is cut across,
+// through its centroid; with 51 mm not that way either (too_small). A plane across the slab
+// (extent 100 mm along its normal) is left where it is.
+TEST(StressModel, MinPieceThicknessKeepsALongSlabFromBeingCutIntoAStrip) {
+  const double a = 0.05, b = 0.003, P = 1e5;
+  Grain g;
+  g.shape = Shape::polygon({{-a, -b, 0}, {a, -b, 0}, {a, b, 0}, {-a, b, 0}});
+  const std::vector<Contact> cs{wall_contact(1, {-0.6 * a, b, 0}, {0, -P, 0}), wall_contact(2, {0.6 * a, b, 0}, {0, -P, 0}),
+                                wall_contact(3, {-0.6 * a, -b, 0}, {0, 0.9 * P, 0}),
+                                wall_contact(4, {0.6 * a, -b, 0}, {0, 0.9 * P, 0})};
+  auto cut_with = [&](double thickness) {
+    auto m = model({{"criterion", "von_mises"}, {"weibull", false}, {"strength", 1e6}, {"plane_fallback", "shift"},
+                    {"min_piece_thickness", thickness}},
+                   2);
+    Rng rng(1);
+    m->assign_strength(g, Material{}, rng);
+    return m->analyse(g, Material{}, cs);
+  };
+  EXPECT_DOUBLE_EQ(model({{"criterion", "von_mises"}}, 2)->options().min_piece_thickness, 0.0);  // off by default
+  const auto strip = cut_with(0);
+  ASSERT_TRUE(strip.broken) << strip.outcome;
+  const CutPlane p0 = std::get<CuttingSurfaces>(*strip.fracture).planes.at(0);
+  ASSERT_NEAR(std::abs(p0.normal.y), 1.0, 1e-9);
+  EXPECT_NEAR(b - std::abs(p0.offset), 0.1 * 2 * b, 2 * b / 64 + 1e-12);  // the 10 % strip
+  const auto kept = cut_with(0.002);
+  ASSERT_TRUE(kept.broken) << kept.outcome;
+  const CutPlane p1 = std::get<CuttingSurfaces>(*kept.fracture).planes.at(0);
+  EXPECT_NEAR(std::abs(p1.normal.y), 1.0, 1e-9);
+  EXPECT_LE(std::abs(p1.offset), b - 0.002 + 1e-12);
+  EXPECT_GE(std::abs(p1.offset), b - 0.002 - 2 * b / 64);
+  const auto across_cut = cut_with(0.0031);
+  ASSERT_TRUE(across_cut.broken) << across_cut.outcome;
+  const CutPlane p2 = std::get<CuttingSurfaces>(*across_cut.fracture).planes.at(0);
+  EXPECT_NEAR(std::abs(p2.normal.x), 1.0, 1e-9);
+  EXPECT_NEAR(p2.offset, 0.0, 1e-12);
+  EXPECT_NEAR(smaller_side_fraction(*g.shape, p2), 0.5, 0.02);
+  const auto none = cut_with(0.051);
+  EXPECT_FALSE(none.broken);
+  EXPECT_EQ(none.outcome, "too_small");
+  EXPECT_FALSE(none.fracture);
+  const CutPlane across{{1, 0, 0}, 0.02};
+  const auto same = keep_piece_thickness(*g.shape, across, 0.002);
+  ASSERT_TRUE(same);
+  EXPECT_EQ(same->offset, 0.02);
+  EXPECT_NEAR(keep_piece_thickness(*g.shape, across, 0.04)->offset, a - 0.04, a / 64);
+  EXPECT_FALSE(keep_piece_thickness(*g.shape, across, 0.051));
+}
+
 TEST(StressModel, SingleContactIn3DIsHeldOff) {
   auto m = model({{"criterion", "von_mises"}, {"weibull", false}}, 3);
   Grain g;
