@@ -19,6 +19,10 @@ crumble_require(OpenMP_CXX_FOUND "g++ (libgomp)" "OpenMP")
 
 find_package(Threads REQUIRED)
 
+# The compressed binary arrays of the ParaView files (output.vtk_format).
+find_package(ZLIB QUIET)
+crumble_require(ZLIB_FOUND zlib1g-dev "zlib")
+
 find_package(CLI11 QUIET CONFIG)
 crumble_require(CLI11_FOUND libcli11-dev "CLI11")
 

@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <zlib.h>
+
 #include "core/MovingWall.h"
 #include "core/Screening.h"
 #include "output/Writers.h"
@@ -112,62 +114,141 @@ std::string values_text(const VtpPiece::Field& f, const char* where) {
   return os;
 }
 
+// VTK XML binary data (format="binary", VTKFile header_type UInt64, compressor
+// vtkZLibDataCompressor): the header [blocks 1, block size n, last block size n, compressed
+// size c] base64-encoded on its own, then the zlib-compressed bytes base64-encoded. A grain's
+// cell values repeat over its triangles, so they compress to a few per cent.
+void append_base64(std::string& out, const unsigned char* p, std::size_t n) {
+  static const char* abc = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  for (std::size_t i = 0; i < n; i += 3) {
+    const unsigned v = (unsigned{p[i]} << 16) | (i + 1 < n ? unsigned{p[i + 1]} << 8 : 0u) | (i + 2 < n ? p[i + 2] : 0u);
+    out += abc[(v >> 18) & 63];
+    out += abc[(v >> 12) & 63];
+    out += i + 1 < n ? abc[(v >> 6) & 63] : '=';
+    out += i + 2 < n ? abc[v & 63] : '=';
+  }
+}
+
+std::string binary_text(const void* data, std::size_t bytes) {
+  uLongf c = compressBound(static_cast<uLong>(bytes));
+  std::vector<unsigned char> z(c);
+  if (compress2(z.data(), &c, static_cast<const Bytef*>(data), static_cast<uLong>(bytes), Z_BEST_SPEED) != Z_OK)
+    throw std::runtime_error("zlib could not compress a VTK array of " + std::to_string(bytes) + " bytes");
+  const std::uint64_t header[4] = {1, bytes, bytes, c};
+  std::string out;
+  out.reserve(4 * (sizeof header + c) / 3 + 8);
+  append_base64(out, reinterpret_cast<const unsigned char*>(header), sizeof header);
+  append_base64(out, z.data(), c);
+  out += '\n';
+  return out;
+}
+
+template <class T>
+std::string binary_text(const std::vector<T>& v) {
+  return binary_text(v.data(), v.size() * sizeof(T));
+}
+
+std::vector<std::int64_t> as_int64(const std::vector<double>& v) {
+  return {v.begin(), v.end()};
+}
+
+void require_finite(const VtpPiece::Field& f, const char* where) {
+  for (double v : f.values)
+    if (!std::isfinite(v))
+      throw std::runtime_error("refusing to write a non-finite value in VTK " + std::string(where) + " field '" +
+                               f.name + "'");
+}
+
+// The opening tag of a DataArray; an empty array is written as ascii (nothing to compress).
+std::string array_head(const char* type, const std::string& name, int components, bool binary, bool empty) {
+  std::string h = std::string("<DataArray type=\"") + type + "\"";
+  if (!name.empty()) h += " Name=\"" + name + "\"";
+  if (components > 0) h += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+  return h + " format=\"" + (binary && !empty ? "binary" : "ascii") + "\">\n";
+}
+
+std::string field_text(const VtpPiece::Field& f, const char* where, bool binary) {
+  if (!binary || f.values.empty()) return values_text(f, where);
+  require_finite(f, where);
+  return f.integer ? binary_text(as_int64(f.values)) : binary_text(f.values);
+}
+
 void write_fields(std::string& os, const std::vector<VtpPiece::Field>& fields, std::size_t count, const char* where,
-                  VtpTextCache* cache) {
+                  VtpTextCache* cache, bool binary) {
   for (const auto& f : fields) {
     if (f.values.size() != count * static_cast<std::size_t>(f.components))
       throw std::logic_error(std::string("VTK ") + where + " field '" + f.name + "' has " +
                              std::to_string(f.values.size()) + " values for " + std::to_string(count) + " entries");
-    const std::string head = std::string("<DataArray type=\"") + (f.integer ? "Int64" : "Float64") + "\" Name=\"" +
-                             f.name + "\" NumberOfComponents=\"" + std::to_string(f.components) +
-                             "\" format=\"ascii\">\n";
+    const std::string head = array_head(f.integer ? "Int64" : "Float64", f.name, f.components, binary, f.values.empty());
     os += head;
     const std::string key = where + head;
     if (const std::string* t = cache ? cache->find(key, f.values) : nullptr) os += *t;
-    else if (cache) os += cache->store(key, f.values, values_text(f, where));
-    else os += values_text(f, where);
+    else if (cache) os += cache->store(key, f.values, field_text(f, where, binary));
+    else os += field_text(f, where, binary);
     os += "</DataArray>\n";
   }
 }
 
-// The cells' connectivity (point indices, one cell a line), then their offsets.
-std::string cells_text(const VtpPiece& p) {
-  std::string os;
+// The cells' connectivity (point indices; ascii: one cell a line), then their offsets.
+std::string cells_text(const VtpPiece& p, bool binary) {
+  std::vector<std::int64_t> conn, offsets;
   for (const auto& c : p.cells) {
-    for (std::size_t i = 0; i < c.size(); ++i) {
-      if (c[i] < 0 || static_cast<std::size_t>(c[i]) >= p.points.size())
-        throw std::logic_error("VTK cell names point " + std::to_string(c[i]) + " of " + std::to_string(p.points.size()));
-      append_integer(os, c[i]);
-      os += i + 1 < c.size() ? ' ' : '\n';
+    for (long i : c) {
+      if (i < 0 || static_cast<std::size_t>(i) >= p.points.size())
+        throw std::logic_error("VTK cell names point " + std::to_string(i) + " of " + std::to_string(p.points.size()));
+      conn.push_back(i);
+    }
+    offsets.push_back(static_cast<std::int64_t>(conn.size()));
+  }
+  std::string os = array_head("Int64", "connectivity", 0, binary, conn.empty());
+  if (binary && !conn.empty()) {
+    os += binary_text(conn);
+  } else {
+    for (const auto& c : p.cells)
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        append_integer(os, c[i]);
+        os += i + 1 < c.size() ? ' ' : '\n';
+      }
+  }
+  os += "</DataArray>\n" + array_head("Int64", "offsets", 0, binary, offsets.empty());
+  if (binary && !offsets.empty()) {
+    os += binary_text(offsets);
+  } else {
+    for (auto o : offsets) {
+      append_integer(os, o);
+      os += '\n';
     }
   }
-  os += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  long off = 0;
-  for (const auto& c : p.cells) {
-    append_integer(os, off += static_cast<long>(c.size()));
-    os += '\n';
+  return os + "</DataArray>\n";
+}
+
+std::string points_text(const VtpPiece& p, bool binary) {
+  std::string os = array_head("Float64", "", 3, binary, p.points.empty());
+  std::vector<double> xyz;
+  xyz.reserve(3 * p.points.size());
+  for (const auto& x : p.points) {
+    if (!is_finite(x)) throw std::runtime_error("refusing to write a non-finite VTK point");
+    xyz.insert(xyz.end(), {x.x, x.y, x.z});
   }
-  return os;
+  if (binary && !xyz.empty()) {
+    os += binary_text(xyz);
+  } else {
+    for (std::size_t i = 0; i < xyz.size(); ++i) {
+      append_number(os, xyz[i]);
+      os += i % 3 == 2 ? '\n' : ' ';
+    }
+  }
+  return os + "</DataArray>\n";
 }
 
 // The <Points> and the cells of a piece.
-void write_geometry(std::string& os, const VtpPiece& p, VtpTextCache* cache) {
-  os += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const auto& x : p.points) {
-    if (!is_finite(x)) throw std::runtime_error("refusing to write a non-finite VTK point");
-    append_number(os, x.x);
-    os += ' ';
-    append_number(os, x.y);
-    os += ' ';
-    append_number(os, x.z);
-    os += '\n';
-  }
-  os += "</DataArray>\n</Points>\n";
+void write_geometry(std::string& os, const VtpPiece& p, VtpTextCache* cache, bool binary) {
+  os += "<Points>\n" + points_text(p, binary) + "</Points>\n";
   const std::string tag =
       p.kind == VtpPiece::Cells::Verts ? "Verts" : p.kind == VtpPiece::Cells::Lines ? "Lines" : "Polys";
-  os += '<' + tag + ">\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  os += '<' + tag + ">\n";
   if (!cache) {
-    os += cells_text(p);
+    os += cells_text(p, binary);
   } else {
     // The text depends on the cells and (through the index check) the number of points.
     std::vector<double> key{static_cast<double>(p.points.size())};
@@ -176,9 +257,9 @@ void write_geometry(std::string& os, const VtpPiece& p, VtpTextCache* cache) {
       key.insert(key.end(), c.begin(), c.end());
     }
     const std::string* t = cache->find("cells", key);
-    os += t ? *t : cache->store("cells", std::move(key), cells_text(p));
+    os += t ? *t : cache->store("cells", std::move(key), cells_text(p, binary));
   }
-  os += "</DataArray>\n</" + tag + ">\n";
+  os += "</" + tag + ">\n";
 }
 
 }  // namespace
@@ -199,7 +280,7 @@ const std::string& VtpTextCache::store(const std::string& key, std::vector<doubl
   return e.text;
 }
 
-std::string vtp_text(const VtpPiece& p, VtpTextCache* cache) {
+std::string vtp_text(const VtpPiece& p, VtpTextCache* cache, bool binary) {
   std::string os;
   // About 12 characters a number: one reservation instead of the string's doublings.
   std::size_t numbers = 4 * p.points.size() + 2 * p.cells.size();
@@ -209,16 +290,18 @@ std::string vtp_text(const VtpPiece& p, VtpTextCache* cache) {
   os.reserve(12 * numbers + 1024);
   const std::size_t nc = p.cells.size();
   const auto count = [&](VtpPiece::Cells k) { return std::to_string(p.kind == k ? nc : 0); };
-  os += "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
+  os += binary ? "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                 "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">\n"
+               : "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
   os += "<PolyData>\n<Piece NumberOfPoints=\"" + std::to_string(p.points.size()) + "\" NumberOfVerts=\"" +
         count(VtpPiece::Cells::Verts) + "\" NumberOfLines=\"" + count(VtpPiece::Cells::Lines) +
         "\" NumberOfStrips=\"0\" NumberOfPolys=\"" + count(VtpPiece::Cells::Polys) + "\">\n";
   os += "<PointData>\n";
-  write_fields(os, p.point_fields, p.points.size(), "point", cache);
+  write_fields(os, p.point_fields, p.points.size(), "point", cache, binary);
   os += "</PointData>\n<CellData>\n";
-  write_fields(os, p.cell_fields, nc, "cell", cache);
+  write_fields(os, p.cell_fields, nc, "cell", cache, binary);
   os += "</CellData>\n";
-  write_geometry(os, p, cache);
+  write_geometry(os, p, cache, binary);
   os += "</Piece>\n</PolyData>\n</VTKFile>\n";
   return os;
 }
@@ -564,7 +647,7 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   std::vector<std::pair<std::string, std::string>> blocks;  // (block name, file)
   auto put = [&](const char* block, const VtpPiece& piece) {
     const std::string name = step_name(block, s.step, "vtp");
-    write_file_atomic(dir_ + "/vtk/" + name, vtp_text(piece, &text_[block]));
+    write_file_atomic(dir_ + "/vtk/" + name, vtp_text(piece, &text_[block], set_.binary));
     blocks.push_back({block, name});
   };
   put("grains", grains_piece(sim, on, *metrics_));
@@ -584,7 +667,8 @@ void VtkWriter::snapshot(const Simulation& sim_c, const RunState& s) {
   write_collections();
 }
 
-AnalysisVtkWriter::AnalysisVtkWriter(const std::string& dir, long resume_step) : dir_(dir) {
+AnalysisVtkWriter::AnalysisVtkWriter(const std::string& dir, long resume_step, bool binary)
+    : dir_(dir), binary_(binary) {
   fs::create_directories(dir_ + "/vtk");
   if (resume_step < 0) return;
   for (const auto& [t, f] : read_pvd(dir_ + "/analyses.pvd")) {
@@ -622,7 +706,7 @@ void AnalysisVtkWriter::on_breakage(const Simulation& sim, const BreakageEvent& 
   gid.assign(cloud->points.size(), static_cast<double>(e.parent));
   char name[96];
   std::snprintf(name, sizeof name, "analysis_%08ld_g%lld.vtp", e.step, static_cast<long long>(e.parent));
-  write_file_atomic(dir_ + "/vtk/" + name, vtp_text(p));
+  write_file_atomic(dir_ + "/vtk/" + name, vtp_text(p, nullptr, binary_));
   pvd_.add(e.time, name);
   collection_written_ = false;
   write_collection();

@@ -32,6 +32,7 @@ struct VtkOutputSettings {
   bool vtk_final = true;      // write the final state as VTK
   bool vtk_contacts = false;  // contact-force lines in each VTK snapshot
   bool vtk_analyses = false;  // per-point data of breakage analyses (vtk/analysis_*.vtp)
+  bool vtk_binary = true;     // zlib-compressed binary arrays (false: ascii text)
 };
 // Bound to the VtkOutputSettings base of S (the scenario's output settings).
 template <class S>
@@ -53,6 +54,11 @@ OptionTable vtk_output_options_of() {
       opt::boolean("vtk_analyses", static_cast<bool S::*>(&V::vtk_analyses),
                    "every breakage whose analysis returns per-point data (peridynamics: the lattice with damage, "
                    "piece and displacement per point) is written as vtk/analysis_*.vtp, listed in analyses.pvd"),
+      opt::mapped_choice("vtk_format", static_cast<bool S::*>(&V::vtk_binary), {{"binary", true}, {"ascii", false}},
+                         "encoding of the VTK arrays: binary = zlib-compressed (VTK XML 1.0, read by ParaView, VTK >= 6 "
+                         "and crumble's Python reader; a grain's values repeat over its cells and compress to a few "
+                         "per cent), ascii = numbers as text (about 10 times larger and slower to write; "
+                         "docs/output.md)"),
   };
 }
 const OptionTable& vtk_output_options();
@@ -94,7 +100,8 @@ class VtpTextCache {
 
 // The .vtp text; throws std::runtime_error naming the field when a value is not finite or a
 // field has the wrong length. With a cache: the text of unchanged arrays comes from it.
-std::string vtp_text(const VtpPiece& piece, VtpTextCache* cache = nullptr);
+// binary: the arrays zlib-compressed and base64-encoded (VTK XML 1.0); else as text.
+std::string vtp_text(const VtpPiece& piece, VtpTextCache* cache = nullptr, bool binary = false);
 
 // A ParaView collection (.pvd) kept as text, one line formatted per entry when it is added
 // (a run rewrites its collections after every snapshot). parts: several files at one time
@@ -121,6 +128,7 @@ class VtkWriter : public Observer {
     double wall_height = 0;   // m, height of the drawn side walls (0: the container's as set);
                               // the scenario's, so a resumed run draws the same walls
     long max_frames = 0;      // most snapshots over the loading's progress (0 = no limit)
+    bool binary = true;       // output.vtk_format: compressed binary arrays, else ascii
   };
   // resume_step >= 0: keep the snapshots of the earlier run up to that step. metrics: the
   // shape descriptors' cache, shared with the run's ShapeWriter (null: one of its own).
@@ -150,13 +158,14 @@ class AnalysisVtkWriter : public Observer {
  public:
   std::string name() const override { return "vtk_analyses"; }
   // resume_step >= 0: keep the analyses of the earlier run up to that step.
-  AnalysisVtkWriter(const std::string& dir, long resume_step = -1);
+  AnalysisVtkWriter(const std::string& dir, long resume_step = -1, bool binary = true);
   void on_breakage(const Simulation& sim, const BreakageEvent& e) override;
   void on_finish(const Simulation&, const RunState&, RunSummary&) override;
 
  private:
   void write_collection();
   std::string dir_;
+  bool binary_;
   PvdCollection pvd_{true};
   bool collection_written_ = false;  // analyses.pvd holds every analysis so far
 };

@@ -33,9 +33,9 @@ void attach_standard_observers(Scenario& sc, const std::string& out, const Json&
     sim.add_observer(std::make_shared<VtkWriter>(
         out,
         VtkWriter::Settings{sc.output.vtk_every, sc.output.vtk_final, sc.output.vtk_contacts,
-                            sc.packing.container.height, sc.output.vtk_max_frames},
+                            sc.packing.container.height, sc.output.vtk_max_frames, sc.output.vtk_binary},
         resumed ? st.step : -1, metrics));
-  if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1));
+  if (sc.output.vtk_analyses) sim.add_observer(std::make_shared<AnalysisVtkWriter>(out, resumed ? st.step : -1, sc.output.vtk_binary));
   sim.add_observer(std::make_shared<StagesWriter>(
       out, sim.loading().settings().mode == "strain_rate" ? StagesWriter::Axis::Strain : StagesWriter::Axis::Stress,
       resumed ? st.step : -1L));

@@ -26,12 +26,15 @@ names the file and what is wrong); 3 matplotlib is not importable (nothing writt
 other failure. One line per written file on stdout unless --quiet.
 """
 
+import base64
 import csv
 import json
 import math
 import os
+import struct
 import sys
 import xml.etree.ElementTree as ET
+import zlib
 
 EXIT_DATA = 2
 EXIT_NO_MATPLOTLIB = 3
@@ -122,9 +125,31 @@ def vtk_snapshots(d):
     return (files[0], files[-1]) if files else ()
 
 
+def vtk_array_values(a, root):
+    """The numbers of a DataArray element as floats: ascii, or crumble's binary arrays (VTK XML
+    1.0 with UInt64 headers and zlib: the header [blocks, block size, last block size,
+    compressed sizes...] base64-encoded on its own, then the compressed blocks); None for
+    another encoding."""
+    fmt = a.get("format", "ascii")
+    if fmt == "ascii":
+        return [float(x) for x in (a.text or "").split()]
+    if fmt != "binary" or root.get("header_type") != "UInt64" or root.get("compressor") != "vtkZLibDataCompressor":
+        return None
+    text = "".join((a.text or "").split())
+    blocks = struct.unpack("<Q", base64.b64decode(text[:12])[:8])[0]
+    head_len = 4 * -(-8 * (3 + blocks) // 3)
+    sizes = struct.unpack(f"<{3 + blocks}Q", base64.b64decode(text[:head_len])[: 8 * (3 + blocks)])[3:]
+    data, raw, at = base64.b64decode(text[head_len:]), b"", 0
+    for c in sizes:
+        raw += zlib.decompress(data[at : at + c])
+        at += c
+    code = "q" if a.get("type", "").startswith("Int") else "d"
+    return [float(x) for x in struct.unpack(f"<{len(raw) // 8}{code}", raw)]
+
+
 def vtk_grain_values(path, names):
-    """Per grain (first cell of each grain id) the CellData arrays `names` of an ASCII .vtp;
-    {} when the file carries them in another encoding (the figure is then left out)."""
+    """Per grain (first cell of each grain id) the CellData arrays `names` of a .vtp; {} when
+    the file carries them in an encoding crumble does not write (the figure is then left out)."""
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as e:
@@ -132,12 +157,13 @@ def vtk_grain_values(path, names):
     arrays = {}
     for a in root.iter("DataArray"):
         if a.get("Name") in set(names) | {"grain"}:
-            if a.get("format", "ascii") != "ascii":
-                return {}
             try:
-                arrays[a.get("Name")] = [float(x) for x in (a.text or "").split()]
-            except ValueError:
-                raise DataError(f"{path}: DataArray '{a.get('Name')}' holds a value that is not a number")
+                values = vtk_array_values(a, root)
+            except (ValueError, struct.error, zlib.error) as e:
+                raise DataError(f"{path}: DataArray '{a.get('Name')}' cannot be read: {e}")
+            if values is None:
+                return {}
+            arrays[a.get("Name")] = values
     if "grain" not in arrays or any(n not in arrays for n in names):
         return {}
     seen, out = set(), {n: [] for n in names}

@@ -33,7 +33,7 @@ while [ $# -gt 0 ]; do
 done
 
 packages=(g++ cmake make pkg-config libbullet-dev libode-dev libeigen3-dev libcgal-dev
-          nlohmann-json3-dev libgtest-dev libcli11-dev python3-matplotlib
+          nlohmann-json3-dev libgtest-dev libcli11-dev zlib1g-dev python3-matplotlib
           pybind11-dev python3-dev python3-numpy python3-pandas)
 # Only the test suite reads the ParaView files back (tests/integration/paraview); python3-vtk9
 # pulls in Qt, so a build of selected targets (the README's run command) goes without it.

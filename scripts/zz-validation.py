@@ -25,6 +25,8 @@ import re
 import sys
 import xml.etree.ElementTree as ET
 
+from crumble_plot import vtk_array_values  # scripts/crumble_plot.py, beside this script
+
 
 def read_csv(run, name):
     for f in (name, name + ".part"):
@@ -91,12 +93,13 @@ def fractal_dimension(d, sieves=12):
 def snapshot(path):
     """per grain (id -> diameter, EI, FI, generation) from a grains_*.vtp (cell data per face)."""
     arrays = {}
-    for _, el in ET.iterparse(path):
-        if el.tag == "DataArray" and el.get("Name") in ("grain", "diameter", "zingg_ei", "zingg_fi", "generation"):
-            if el.get("format") != "ascii":
-                sys.exit(f"zz-validation: {path}: only ascii VTK arrays are read")
-            arrays[el.get("Name")] = [float(v) for v in el.text.split()]
-        el.clear()
+    root = ET.parse(path).getroot()
+    for el in root.iter("DataArray"):
+        if el.get("Name") in ("grain", "diameter", "zingg_ei", "zingg_fi", "generation"):
+            values = vtk_array_values(el, root)
+            if values is None:
+                sys.exit(f"zz-validation: {path}: DataArray {el.get('Name')} is in an encoding crumble does not write")
+            arrays[el.get("Name")] = values
     grains = {}
     for i, g in enumerate(arrays.get("grain", [])):
         grains.setdefault(int(g), (arrays["diameter"][i], arrays["zingg_ei"][i], arrays["zingg_fi"][i],

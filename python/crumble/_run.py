@@ -2,10 +2,12 @@
 Python, no compiled module needed. The files are described in README "Outputs" and
 docs/output.md; every number is in SI units, named in the column (``platen_stress_Pa``)."""
 
+import base64
 import json
 import os
 import re
 import xml.etree.ElementTree as ET
+import zlib
 from pathlib import Path
 
 from ._errors import InputError
@@ -106,6 +108,34 @@ def read_csv(f):
     return df
 
 
+def _vtk_values(a, root, path):
+    """The numbers of one DataArray: ascii text, or crumble's binary arrays (VTK XML 1.0,
+    header_type UInt64, zlib blocks: the header [blocks, block size, last block size,
+    compressed sizes...] base64-encoded on its own, then the compressed blocks)."""
+    import numpy as np
+
+    dtype = np.int64 if a.get("type", "").startswith("Int") else np.float64
+    fmt = a.get("format", "ascii")
+    if fmt == "ascii":
+        return np.array((a.text or "").split(), dtype=dtype)
+    if fmt != "binary" or root.get("header_type") != "UInt64" or root.get("compressor") != "vtkZLibDataCompressor":
+        raise InputError(f"{path}: DataArray '{a.get('Name')}' is {fmt} without UInt64 headers and zlib "
+                         "(crumble reads its own ascii and binary files)")
+    text = "".join((a.text or "").split())
+    try:
+        blocks = int(np.frombuffer(base64.b64decode(text[:12])[:8], dtype="<u8")[0])
+        head_len = 4 * -(-8 * (3 + blocks) // 3)
+        sizes = np.frombuffer(base64.b64decode(text[:head_len])[: 8 * (3 + blocks)], dtype="<u8")[3:]
+        data = base64.b64decode(text[head_len:])
+        out, at = [], 0
+        for c in sizes:
+            out.append(zlib.decompress(data[at : at + int(c)]))
+            at += int(c)
+    except (ValueError, zlib.error) as e:
+        raise InputError(f"{path}: DataArray '{a.get('Name')}' cannot be decoded: {e}") from None
+    return np.frombuffer(b"".join(out), dtype=np.dtype(dtype).newbyteorder("<")).astype(dtype)
+
+
 def read_grains_vtp(path):
     """Per-grain arrays of a grains VTP file: its cell fields, one row per grain (a 3D grain
     has one cell per triangle, all with the grain's values)."""
@@ -120,8 +150,7 @@ def read_grains_vtp(path):
         raise InputError(f"{path}: no CellData in the PolyData piece")
     fields = {}
     for a in cells.findall("DataArray"):
-        dtype = np.int64 if a.get("type", "").startswith("Int") else np.float64
-        v = np.array((a.text or "").split(), dtype=dtype)
+        v = _vtk_values(a, root, path)
         n = int(a.get("NumberOfComponents", "1"))
         fields[a.get("Name")] = v.reshape(-1, n) if n > 1 else v
     if "grain" not in fields:

@@ -6,13 +6,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <map>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
+
+#include <zlib.h>
 
 #include "core/Simulation.h"
 #include "output/Checkpoint.h"
@@ -329,12 +334,49 @@ class BoxesBuilder : public FragmentBuilder {
   }
 };
 
-// The values of DataArray `name` of a .vtp text, one per entry (first component).
+std::string base64_decoded(const std::string& t) {
+  std::string out;
+  unsigned v = 0;
+  int bits = 0;
+  for (char ch : t) {
+    const auto at = std::string_view("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/").find(ch);
+    if (at == std::string_view::npos) continue;  // padding, line ends
+    v = (v << 6) | static_cast<unsigned>(at);
+    if ((bits += 6) >= 8) out += static_cast<char>((v >> (bits -= 8)) & 0xff);
+  }
+  return out;
+}
+
+// The values of a binary array's text (VTK XML 1.0, UInt64 header [1, n, n, c] encoded on its
+// own, then n bytes zlib-compressed to c), as the writer lays it out.
+std::vector<double> binary_values(const std::string& t, bool integer) {
+  const std::string head = base64_decoded(t.substr(0, 44));  // 32 bytes: 44 characters
+  std::uint64_t h[4];
+  std::memcpy(h, head.data(), sizeof h);
+  EXPECT_EQ(h[0], 1u);
+  const std::string z = base64_decoded(t.substr(44));
+  std::vector<unsigned char> raw(h[1]);
+  uLongf n = raw.size();
+  EXPECT_EQ(uncompress(raw.data(), &n, reinterpret_cast<const Bytef*>(z.data()), h[3]), Z_OK);
+  std::vector<double> v(n / 8);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    std::int64_t k;
+    if (integer) std::memcpy(&k, raw.data() + 8 * i, 8), v[i] = static_cast<double>(k);
+    else std::memcpy(&v[i], raw.data() + 8 * i, 8);
+  }
+  return v;
+}
+
+// The values of DataArray `name` of a .vtp text, every component, in either encoding.
 std::vector<double> vtp_array(const std::string& text, const std::string& name) {
   std::vector<double> v;
   const auto at = text.find("Name=\"" + name + "\"");
   if (at == std::string::npos) return v;
-  std::istringstream in(text.substr(text.find('\n', at) + 1, text.find("</DataArray>", at) - text.find('\n', at) - 1));
+  const auto open = text.rfind('<', at), start = text.find('\n', at) + 1;
+  const std::string tag = text.substr(open, start - open), body = text.substr(start, text.find("</DataArray>", at) - start);
+  if (tag.find("format=\"binary\"") != std::string::npos)
+    return binary_values(body, tag.find("type=\"Int64\"") != std::string::npos);
+  std::istringstream in(body);
   for (double x; in >> x;) v.push_back(x);
   return v;
 }
@@ -365,6 +407,34 @@ TEST(SimulationLoop, CachedShapeDescriptorsFollowTheFragments) {
   const auto values = vtp_array(last, "sphericity");
   ASSERT_FALSE(values.empty());
   for (double v : values) EXPECT_NEAR(v, box, 1e-9);
+}
+
+// output.vtk_format: the compressed binary snapshot (the default) holds the values of the
+// ascii one (its 10 significant digits; 17 for the pose and mass) in every array, and is smaller.
+TEST(SimulationLoop, BinaryVtkSnapshotsHoldTheAsciiValues) {
+  const fs::path dir = fs::temp_directory_path() / "crumble_simulation_loop" / "vtk_formats";
+  fs::remove_all(dir);
+  const auto sim = one_grain_squeeze(std::make_unique<BoxesBuilder>());
+  VtkWriter::Settings ascii{1, true, false, 0};
+  ascii.binary = false;
+  sim->add_observer(std::make_shared<VtkWriter>((dir / "binary").string(), VtkWriter::Settings{1, true, false, 0}));
+  sim->add_observer(std::make_shared<VtkWriter>((dir / "ascii").string(), ascii));
+  const RunSummary sum = sim->run();
+  ASSERT_EQ(sum.breakage_events, 1);
+  const std::string name = "grains_" + std::string(8 - std::to_string(sum.steps).size(), '0') +
+                           std::to_string(sum.steps) + ".vtp";
+  std::ifstream ib(dir / "binary" / "vtk" / name), ia(dir / "ascii" / "vtk" / name);
+  const std::string b((std::istreambuf_iterator<char>(ib)), {}), a((std::istreambuf_iterator<char>(ia)), {});
+  ASSERT_NE(b.find("compressor=\"vtkZLibDataCompressor\""), std::string::npos);
+  EXPECT_EQ(a.find("format=\"binary\""), std::string::npos);
+  EXPECT_LT(b.size(), a.size());
+  for (const char* n : {"grain", "parent", "diameter", "velocity", "position", "orientation", "mass", "sphericity",
+                        "connectivity", "offsets"}) {
+    const auto x = vtp_array(b, n), y = vtp_array(a, n);
+    ASSERT_EQ(x.size(), y.size()) << n;
+    ASSERT_FALSE(x.empty()) << n;
+    for (std::size_t i = 0; i < x.size(); ++i) EXPECT_NEAR(x[i], y[i], 1e-9 * std::abs(y[i]) + 1e-300) << n << ' ' << i;
+  }
 }
 
 namespace {
