@@ -68,6 +68,10 @@ class Engine {
   // (packing generation: frictionless settling gives a dense packing). Returns false when
   // the engine cannot, which is the default for scale != 1.
   virtual bool set_friction_scale(double scale) { return scale == 1.0; }
+  // Multiply the engine's global (mass-proportional) damping by `scale` until called again
+  // (settling a cloud under gravity, which a strong global damping would hold back). Returns
+  // false when the engine has no global damping, which is the default for scale != 1.
+  virtual bool set_global_damping_scale(double scale) { return scale == 1.0; }
   // Relaxing a packing another engine built (scenarios/Packing.h): an explicit engine meets the
   // other engine's overlaps as stored elastic energy and must dissipate it while the grains push
   // apart, or the packing bursts. `on` adds a damping that makes every grain overdamped until

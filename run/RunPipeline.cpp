@@ -625,7 +625,8 @@ Json request_document(const RunRequest& req) {
   for (const auto& o : req.sets) apply_override_lapsing(doc, o);
   if (req.packing_file && doc.is_object() && !doc.contains("scene")) {
     // The scenario's settling stress and convergence test serve a relaxation (Packing.h); its
-    // friction scale does not: a packing relaxes with the friction it is loaded with.
+    // friction and global-damping scales do not: a packing relaxes with the friction and
+    // damping it is loaded with.
     Json file{{"type", "file"}, {"path", *req.packing_file}};
     const Json* settle = doc.contains("packing") && doc["packing"].is_object() && doc["packing"].contains("settle")
                              ? &doc["packing"]["settle"] : nullptr;
@@ -633,6 +634,7 @@ Json request_document(const RunRequest& req) {
       Json s = *settle;
       s.erase("enabled");
       s.erase("friction_scale");
+      s.erase("global_damping_scale");
       if (!s.empty()) file["settle"] = std::move(s);
     }
     doc["packing"] = std::move(file);

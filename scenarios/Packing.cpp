@@ -244,7 +244,7 @@ const OptionTable& relax_options() {
   static const OptionTable t = [] {
     OptionTable r;
     for (const auto& o : settle_options())
-      if (o.key != "enabled" && o.key != "friction_scale") r.push_back(o);
+      if (o.key != "enabled" && o.key != "friction_scale" && o.key != "global_damping_scale") r.push_back(o);
     return r;
   }();
   return t;
@@ -392,6 +392,9 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   if (!e.set_friction_scale(ss.friction_scale))
     throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
                                                             "' cannot change friction while settling; use 1");
+  if (!e.set_global_damping_scale(ss.global_damping_scale))
+    throw ConfigError("/packing/settle/global_damping_scale",
+                      "the engine '" + e.name() + "' has no global damping to scale while settling; use 1");
   const long guard_every = std::max(1L, sim.settings().sample_every);
   res.converged = false;
   while (p.steps < max_steps) {
@@ -423,6 +426,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   res.stress_first = p.stress_first;
   res.stress_max = p.stress_max;
   e.set_friction_scale(1.0);
+  e.set_global_damping_scale(1.0);
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
   return res;

@@ -179,6 +179,12 @@ void check_engine_can(Engine& engine, const RegistryEntry<EngineFactory>& entry,
                         "the engine '" + entry.name + "' cannot change friction while settling; use 1");
     engine.set_friction_scale(1.0);
   }
+  if (packing.settle && packing.settle_settings.global_damping_scale != 1.0) {
+    if (!engine.set_global_damping_scale(packing.settle_settings.global_damping_scale))
+      throw ConfigError("/packing/settle/global_damping_scale",
+                        "the engine '" + entry.name + "' has no global damping to scale while settling; use 1");
+    engine.set_global_damping_scale(1.0);
+  }
   if (packing.walls.empty()) return;
   nlohmann::json copy = ec.doc();
   Config probe_cfg(copy);

@@ -162,6 +162,9 @@ const OptionTable& settle_options() {
       opt::positive("window", &S::window, "s", "simulated time between checks"),
       opt::number("friction_scale", &S::friction_scale, 0, 1, "",
                   "friction × this while settling, restored before loading (0: frictionless, a denser packing)"),
+      opt::number("global_damping_scale", &S::global_damping_scale, 0, 1, "",
+                  "engine.global_damping × this while settling, restored before loading (0: none; Harmon et al. "
+                  "2020 Table 2's C_g = 0.01/Δt would hold a grain falling under gravity to g / C_g ≈ 0.2 mm/s)"),
   };
   return t;
 }

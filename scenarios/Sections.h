@@ -76,6 +76,7 @@ struct SettleSettings {
   double tolerance = 1e-3;    // platen travel per window, relative to the mean diameter
   double window = 0.01;       // s between checks
   double friction_scale = 1;  // friction × this while settling (0: frictionless, a denser packing)
+  double global_damping_scale = 1;  // engine.global_damping × this while settling
 };
 const OptionTable& settle_options();  // packing.settle
 

@@ -948,7 +948,7 @@ void LsdemEngine::apply_body_loads() {
   for (auto& b : bodies_) {
     b.f = ctx_.gravity * (b.md / s_.mass_scale);  // the weight of the true mass
     b.t = {};
-    const double c = s_.global_damping + relax_damping_;
+    const double c = s_.global_damping * global_damping_scale_ + relax_damping_;
     if (c > 0) {
       b.f -= b.v * (c * b.m);
       if (ctx_.dimension == 2) {
@@ -1074,7 +1074,7 @@ void LsdemEngine::integrate(double dt) {
       M /= s_.mass_scale;
     }
     M = platen_mass(container_, M, s_.mass_scale);
-    platen_.advance(dt, platen_force_, M, s_.global_damping);
+    platen_.advance(dt, platen_force_, M, s_.global_damping * global_damping_scale_);
     // Relaxing, a platen the grains no longer push does not fly on upwards: the overlaps'
     // energy that launched it is what the relaxation removes (left to fly, it rose 45 mm
     // above the quick Zhu & Zhao packing and took 0.4 s to fall back under the settling stress).

@@ -150,6 +150,10 @@ class LsdemEngine final : public Engine {
     friction_scale_ = scale;
     return true;
   }
+  bool set_global_damping_scale(double scale) override {
+    global_damping_scale_ = scale;
+    return true;
+  }
   bool set_relaxation_damping(bool on) override;
 
   void read_state(std::span<Grain> grains) const override;
@@ -302,6 +306,7 @@ class LsdemEngine final : public Engine {
   double elastic_energy_ = 0;  // J (2D: J/m), summed over the last step's contacts
   std::array<double, 6> container_wall_force_{};  // by WallId: the grains' push on each container wall
   double friction_scale_ = 1;  // set_friction_scale (settling)
+  double global_damping_scale_ = 1;  // set_global_damping_scale (settling)
   double relax_damping_ = 0;   // 1/s, added to global_damping while a packing relaxes
   double target_dt_ = 0;       // s: selective mass scaling's target step (0: off or not yet fixed)
   LsdemStats stats_;

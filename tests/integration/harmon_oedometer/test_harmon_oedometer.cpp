@@ -98,6 +98,23 @@ TEST(HarmonOedometer, QuickRunBreaksGrainsKeepsMassAndWritesShapeAndStrainPsd) {
     EXPECT_EQ(s[k], s2[k]) << k;
 }
 
+// Table 2's global damping acts in the loading only: the files scale it by 0 while settling.
+// An engine without global damping refuses a scale, naming the option, before anything runs.
+TEST(HarmonOedometer, GlobalDampingScaleIsCheckedUpFront) {
+  const auto ok = run_cli(std::string("validate ") + CRUMBLE_SOURCE_DIR + "/scenarios/oedometer_harmon_2d_quick.json");
+  EXPECT_EQ(ok.status, 0) << ok.output;
+#if CRUMBLE_WITH_BULLET
+  const auto bad = run_cli(std::string("validate ") + CRUMBLE_SOURCE_DIR +
+                           "/scenarios/oedometer_rigid_quick.json --set packing.settle.global_damping_scale=0");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/packing/settle/global_damping_scale"), std::string::npos) << bad.output;
+#endif
+  const auto range = run_cli(std::string("validate ") + CRUMBLE_SOURCE_DIR +
+                             "/scenarios/oedometer_harmon_2d_quick.json --set packing.settle.global_damping_scale=2");
+  EXPECT_EQ(range.status, 2) << range.output;
+  EXPECT_NE(range.output.find("/packing/settle/global_damping_scale"), std::string::npos) << range.output;
+}
+
 TEST(HarmonOedometer, FrictionScaleIsCheckedUpFront) {
 #if CRUMBLE_WITH_BULLET
   // Bullet scales friction while settling too (Zhu & Zhao packing densified that way).

@@ -209,6 +209,29 @@ TEST(Lsdem, SphereAtRestCarriesItsWeight) {
   EXPECT_NEAR(e.contacts()[0].point.z, 0.0, 0.01);
 }
 
+// packing.settle.global_damping_scale: Harmon et al. 2020 Table 2's global damping holds a
+// falling grain to its terminal velocity g / C_g; scaled by 0 while settling, the grain falls
+// freely (v = g t), and scale 1 restores it.
+TEST(Lsdem, GlobalDampingScaleLetsAGrainFallFreely) {
+  LsdemSettings s;
+  s.kn = 1e7;
+  s.global_damping = 100;  // 1/s
+  const auto ctx = context(3, {0, 0, -9.81});
+  const auto fall = [&](double scale) {
+    LsdemEngine e(s, ctx);
+    e.set_container({});
+    e.add_grain(grain(0, sphere(0.1, 0.02, 1000), {0, 0, 10.0}));
+    EXPECT_TRUE(e.set_global_damping_scale(scale));
+    for (int i = 0; i < 500; ++i) e.step(1e-4);  // 0.05 s, far above the floor
+    std::vector<Grain> st(1);
+    st[0].id = 0;
+    e.read_state(st);
+    return -st[0].velocity.z;
+  };
+  EXPECT_NEAR(fall(0), 9.81 * 0.05, 1e-9);
+  EXPECT_NEAR(fall(1), 9.81 / 100 * (1 - std::exp(-100 * 0.05)), 0.01 * 9.81 / 100);
+}
+
 TEST(Lsdem, MassScalingKeepsTheWeightAndLengthensTheStep) {
   // Zhu & Zhao 2019 §5 density scaling: inertia ×70, weight unchanged, stable step ×√70.
   LsdemSettings s;
