@@ -17,14 +17,15 @@
 #include <string_view>
 #include <thread>
 
-#include <zlib.h>
 
 #include "core/Simulation.h"
 #include "output/Checkpoint.h"
 #include "output/VtkWriter.h"
 #include "output/Writers.h"
+#include "tests/support/VtkArrays.h"
 
 using namespace crumble;
+using crumble::test::vtp_array;
 namespace fs = std::filesystem;
 
 namespace {
@@ -334,52 +335,6 @@ class BoxesBuilder : public FragmentBuilder {
   }
 };
 
-std::string base64_decoded(const std::string& t) {
-  std::string out;
-  unsigned v = 0;
-  int bits = 0;
-  for (char ch : t) {
-    const auto at = std::string_view("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/").find(ch);
-    if (at == std::string_view::npos) continue;  // padding, line ends
-    v = (v << 6) | static_cast<unsigned>(at);
-    if ((bits += 6) >= 8) out += static_cast<char>((v >> (bits -= 8)) & 0xff);
-  }
-  return out;
-}
-
-// The values of a binary array's text (VTK XML 1.0, UInt64 header [1, n, n, c] encoded on its
-// own, then n bytes zlib-compressed to c), as the writer lays it out.
-std::vector<double> binary_values(const std::string& t, bool integer) {
-  const std::string head = base64_decoded(t.substr(0, 44));  // 32 bytes: 44 characters
-  std::uint64_t h[4];
-  std::memcpy(h, head.data(), sizeof h);
-  EXPECT_EQ(h[0], 1u);
-  const std::string z = base64_decoded(t.substr(44));
-  std::vector<unsigned char> raw(h[1]);
-  uLongf n = raw.size();
-  EXPECT_EQ(uncompress(raw.data(), &n, reinterpret_cast<const Bytef*>(z.data()), h[3]), Z_OK);
-  std::vector<double> v(n / 8);
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    std::int64_t k;
-    if (integer) std::memcpy(&k, raw.data() + 8 * i, 8), v[i] = static_cast<double>(k);
-    else std::memcpy(&v[i], raw.data() + 8 * i, 8);
-  }
-  return v;
-}
-
-// The values of DataArray `name` of a .vtp text, every component, in either encoding.
-std::vector<double> vtp_array(const std::string& text, const std::string& name) {
-  std::vector<double> v;
-  const auto at = text.find("Name=\"" + name + "\"");
-  if (at == std::string::npos) return v;
-  const auto open = text.rfind('<', at), start = text.find('\n', at) + 1;
-  const std::string tag = text.substr(open, start - open), body = text.substr(start, text.find("</DataArray>", at) - start);
-  if (tag.find("format=\"binary\"") != std::string::npos)
-    return binary_values(body, tag.find("type=\"Int64\"") != std::string::npos);
-  std::istringstream in(body);
-  for (double x; in >> x;) v.push_back(x);
-  return v;
-}
 }  // namespace
 
 // The shape descriptors are computed once per shape and kept between samples: after a
