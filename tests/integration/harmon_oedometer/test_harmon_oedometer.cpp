@@ -169,3 +169,15 @@ TEST(HarmonOedometer, QuickFileRemovesLessThanOnePercentOfTheMass) {
                                          " --set fragments.fines_policy=remove");
   EXPECT_GT(before, 0.02) << "the reduced run no longer breaks grains down to the fines: the test cannot fail";
 }
+
+// The same bound with the other two criteria of Harmon et al. 2020 (eqs. 7–10), each at its
+// Table 2 strength (the von Mises case is the test above).
+TEST(HarmonOedometer, QuickFileRemovesLessThanOnePercentWithEachCriterion) {
+  for (const std::string c : {"max_principal", "tresca"}) {
+    Json s;
+    const double removed =
+        removed_fraction(fs::temp_directory_path() / ("crumble_harmon_fines_" + c), " --set breakage.criterion=" + c, &s);
+    EXPECT_GT(s["breakage_events"].get<long>(), 20) << c << "\n" << s.dump(2);
+    EXPECT_LT(removed, 0.01) << c << "\n" << s.dump(2);
+  }
+}
