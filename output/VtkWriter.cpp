@@ -189,6 +189,16 @@ void write_fields(std::string& os, const std::vector<VtpPiece::Field>& fields, s
   }
 }
 
+// A DataArray of values v: binary, or (ascii, or empty) the text `ascii` appends.
+template <class T, class Ascii>
+std::string data_array(const char* type, const std::string& name, int components, bool binary,
+                       const std::vector<T>& v, Ascii ascii) {
+  std::string os = array_head(type, name, components, binary, v.empty());
+  if (binary && !v.empty()) os += binary_text(v);
+  else ascii(os);
+  return os + "</DataArray>\n";
+}
+
 // The cells' connectivity (point indices; ascii: one cell a line), then their offsets.
 std::string cells_text(const VtpPiece& p, bool binary) {
   std::vector<std::int64_t> conn, offsets;
@@ -200,45 +210,36 @@ std::string cells_text(const VtpPiece& p, bool binary) {
     }
     offsets.push_back(static_cast<std::int64_t>(conn.size()));
   }
-  std::string os = array_head("Int64", "connectivity", 0, binary, conn.empty());
-  if (binary && !conn.empty()) {
-    os += binary_text(conn);
-  } else {
-    for (const auto& c : p.cells)
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        append_integer(os, c[i]);
-        os += i + 1 < c.size() ? ' ' : '\n';
-      }
-  }
-  os += "</DataArray>\n" + array_head("Int64", "offsets", 0, binary, offsets.empty());
-  if (binary && !offsets.empty()) {
-    os += binary_text(offsets);
-  } else {
-    for (auto o : offsets) {
-      append_integer(os, o);
-      os += '\n';
-    }
-  }
-  return os + "</DataArray>\n";
+  return data_array("Int64", "connectivity", 0, binary, conn,
+                    [&](std::string& os) {
+                      std::size_t k = 0;
+                      for (auto end : offsets)
+                        for (; k < static_cast<std::size_t>(end); ++k) {
+                          append_integer(os, conn[k]);
+                          os += k + 1 < static_cast<std::size_t>(end) ? ' ' : '\n';
+                        }
+                    }) +
+         data_array("Int64", "offsets", 0, binary, offsets, [&](std::string& os) {
+           for (auto o : offsets) {
+             append_integer(os, o);
+             os += '\n';
+           }
+         });
 }
 
 std::string points_text(const VtpPiece& p, bool binary) {
-  std::string os = array_head("Float64", "", 3, binary, p.points.empty());
   std::vector<double> xyz;
   xyz.reserve(3 * p.points.size());
   for (const auto& x : p.points) {
     if (!is_finite(x)) throw std::runtime_error("refusing to write a non-finite VTK point");
     xyz.insert(xyz.end(), {x.x, x.y, x.z});
   }
-  if (binary && !xyz.empty()) {
-    os += binary_text(xyz);
-  } else {
+  return data_array("Float64", "", 3, binary, xyz, [&](std::string& os) {
     for (std::size_t i = 0; i < xyz.size(); ++i) {
       append_number(os, xyz[i]);
       os += i % 3 == 2 ? '\n' : ' ';
     }
-  }
-  return os + "</DataArray>\n";
+  });
 }
 
 // The <Points> and the cells of a piece.
@@ -282,12 +283,13 @@ const std::string& VtpTextCache::store(const std::string& key, std::vector<doubl
 
 std::string vtp_text(const VtpPiece& p, VtpTextCache* cache, bool binary) {
   std::string os;
-  // About 12 characters a number: one reservation instead of the string's doublings.
+  // ascii: about 12 characters a number, one reservation instead of the string's doublings
+  // (binary arrays are a few per cent of that and grow the string themselves).
   std::size_t numbers = 4 * p.points.size() + 2 * p.cells.size();
   for (const auto& f : p.point_fields) numbers += f.values.size();
   for (const auto& f : p.cell_fields) numbers += f.values.size();
   for (const auto& c : p.cells) numbers += c.size();
-  os.reserve(12 * numbers + 1024);
+  if (!binary) os.reserve(12 * numbers + 1024);
   const std::size_t nc = p.cells.size();
   const auto count = [&](VtpPiece::Cells k) { return std::to_string(p.kind == k ? nc : 0); };
   os += binary ? "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "

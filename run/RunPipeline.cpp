@@ -22,6 +22,7 @@
 #include "run/Progress.h"
 #include "run/ThreadCheck.h"
 #include "run/StandardObservers.h"
+#include "scenarios/Sections.h"
 #include "output/VtkWriter.h"
 #include "output/Writers.h"
 
@@ -624,17 +625,18 @@ Json request_document(const RunRequest& req) {
   Json doc = req.scenario;
   for (const auto& o : req.sets) apply_override_lapsing(doc, o);
   if (req.packing_file && doc.is_object() && !doc.contains("scene")) {
-    // The scenario's settling stress and convergence test serve a relaxation (Packing.h); its
-    // friction and global-damping scales do not: a packing relaxes with the friction and
-    // damping it is loaded with.
+    // The scenario's settling stress and convergence test serve a relaxation (Packing.h); the
+    // settle options a relaxation does not read (relax_options) go: a packing relaxes with
+    // the friction and damping it is loaded with. Keys of no option stay, to be refused.
     Json file{{"type", "file"}, {"path", *req.packing_file}};
     const Json* settle = doc.contains("packing") && doc["packing"].is_object() && doc["packing"].contains("settle")
                              ? &doc["packing"]["settle"] : nullptr;
     if (settle && settle->is_object()) {
       Json s = *settle;
-      s.erase("enabled");
-      s.erase("friction_scale");
-      s.erase("global_damping_scale");
+      for (const auto& o : settle_options())
+        if (std::none_of(relax_options().begin(), relax_options().end(),
+                         [&](const auto& r) { return r.key == o.key; }))
+          s.erase(o.key);
       if (!s.empty()) file["settle"] = std::move(s);
     }
     doc["packing"] = std::move(file);

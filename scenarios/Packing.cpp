@@ -238,18 +238,6 @@ void cloud_packing(const Config& pc, const PackingSettings& ps, bool height_give
   }
 }
 
-// A file packing is not settled again: of packing.settle only what its relaxation uses is
-// read (and so written to effective_scenario.json, which must run again as it is).
-const OptionTable& relax_options() {
-  static const OptionTable t = [] {
-    OptionTable r;
-    for (const auto& o : settle_options())
-      if (o.key != "enabled" && o.key != "friction_scale" && o.key != "global_damping_scale") r.push_back(o);
-    return r;
-  }();
-  return t;
-}
-
 // An explicit list ("grains") or the packing.json of an earlier run ("file").
 void explicit_packing(const Config& pc, const Config& cc, const PackingSettings& ps, bool height_given, int dim,
                       PackingSpec& spec) {
@@ -372,6 +360,20 @@ bool at_rest(double platen_stress, double travel, const SettleSettings& ss, doub
 
 }  // namespace
 
+void apply_settle_scales(Engine& e, const SettleSettings& ss) {
+  if (!e.set_friction_scale(ss.friction_scale))
+    throw ConfigError("/packing/settle/friction_scale",
+                      "the engine '" + e.name() + "' cannot change friction while settling; use 1");
+  if (!e.set_global_damping_scale(ss.global_damping_scale))
+    throw ConfigError("/packing/settle/global_damping_scale",
+                      "the engine '" + e.name() + "' has no global damping to scale while settling; use 1");
+}
+
+void reset_settle_scales(Engine& e) {
+  e.set_friction_scale(1.0);
+  e.set_global_damping_scale(1.0);
+}
+
 SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const SettleControl& ctl) {
   SettleResult res;
   if (!spec.settle) return res;
@@ -389,12 +391,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   // kept a 100-grain packing flowing for 0.2 s and moved grains 2.5 mm on average).
   bool damped = spec.type == "file";
   if (damped) e.set_relaxation_damping(true);
-  if (!e.set_friction_scale(ss.friction_scale))
-    throw ConfigError("/packing/settle/friction_scale", "the engine '" + e.name() +
-                                                            "' cannot change friction while settling; use 1");
-  if (!e.set_global_damping_scale(ss.global_damping_scale))
-    throw ConfigError("/packing/settle/global_damping_scale",
-                      "the engine '" + e.name() + "' has no global damping to scale while settling; use 1");
+  apply_settle_scales(e, ss);
   const long guard_every = std::max(1L, sim.settings().sample_every);
   res.converged = false;
   while (p.steps < max_steps) {
@@ -425,8 +422,7 @@ SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const Sett
   res.steps = p.steps;
   res.stress_first = p.stress_first;
   res.stress_max = p.stress_max;
-  e.set_friction_scale(1.0);
-  e.set_global_damping_scale(1.0);
+  reset_settle_scales(e);
   e.set_platen({PlatenCommand::Mode::Velocity, 0.0});
   sim.sync_grains();
   return res;

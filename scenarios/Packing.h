@@ -98,6 +98,11 @@ void place_packing(Simulation& sim, const PackingSpec& spec, bool add_grains = t
 // For generated clouds: pushes the platen down until the packing is stable (the initial
 // state of the run). `ctl.stop` ends the settling early; the result says so, and such a
 // packing is not a valid start of a run (a checkpoint of it is: SettleControl).
+// The settling's friction and global-damping scales (packing.settle) set on the engine; a
+// ConfigError naming the option when the engine cannot scale it. reset: both back to 1.
+void apply_settle_scales(Engine& e, const SettleSettings& ss);
+void reset_settle_scales(Engine& e);
+
 SettleResult settle_packing(Simulation& sim, const PackingSpec& spec, const SettleControl& ctl = {});
 
 // place_packing, then settle_packing.

@@ -173,17 +173,9 @@ struct Implementations {
 // now, naming itself, not after settling.
 void check_engine_can(Engine& engine, const RegistryEntry<EngineFactory>& entry, const Config& root, const Config& ec,
                       const EngineContext& ctx, const PackingSpec& packing) {
-  if (packing.settle && packing.settle_settings.friction_scale != 1.0) {
-    if (!engine.set_friction_scale(packing.settle_settings.friction_scale))
-      throw ConfigError("/packing/settle/friction_scale",
-                        "the engine '" + entry.name + "' cannot change friction while settling; use 1");
-    engine.set_friction_scale(1.0);
-  }
-  if (packing.settle && packing.settle_settings.global_damping_scale != 1.0) {
-    if (!engine.set_global_damping_scale(packing.settle_settings.global_damping_scale))
-      throw ConfigError("/packing/settle/global_damping_scale",
-                        "the engine '" + entry.name + "' has no global damping to scale while settling; use 1");
-    engine.set_global_damping_scale(1.0);
+  if (packing.settle) {
+    apply_settle_scales(engine, packing.settle_settings);
+    reset_settle_scales(engine);
   }
   if (packing.walls.empty()) return;
   nlohmann::json copy = ec.doc();

@@ -169,6 +169,16 @@ const OptionTable& settle_options() {
   return t;
 }
 
+const OptionTable& relax_options() {
+  static const OptionTable t = [] {
+    OptionTable r;
+    for (const auto& o : settle_options())
+      if (o.key != "enabled" && o.key != "friction_scale" && o.key != "global_damping_scale") r.push_back(o);
+    return r;
+  }();
+  return t;
+}
+
 const OptionTable& loading_options() {
   using S = LoadingSettings;
   static const OptionTable t = [] {

@@ -79,6 +79,10 @@ struct SettleSettings {
   double global_damping_scale = 1;  // engine.global_damping × this while settling
 };
 const OptionTable& settle_options();  // packing.settle
+// Of packing.settle, what a file packing's relaxation reads (it is not settled again, so
+// enabled and the friction and global-damping scales are not among them); also what
+// effective_scenario.json keeps, which must run again as it is.
+const OptionTable& relax_options();
 
 const OptionTable& loading_options();     // core/Loading.h LoadingSettings
 const OptionTable& simulation_options();  // core/Simulation.h SimulationSettings (but time_steps, threads, guards)
