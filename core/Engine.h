@@ -3,6 +3,7 @@
 // (shape, strength, lineage) and pulls poses and velocities with read_state() when it
 // needs them. Units are SI; an engine that prefers other units scales internally.
 #pragma once
+#include <limits>
 #include <map>
 #include <span>
 #include <stdexcept>
@@ -31,6 +32,12 @@ struct Container {
   // is a guard failure. `height` is then the domain's height (energy bookkeeping).
   bool open = false;
   Aabb domain;
+  // The open scene's frame (Harmon et al. 2020 §4.1 send a grain "to output once [it] left the
+  // frame"): a grain whose centroid is below `discharge_level` and outside the domain sideways
+  // has passed the discharge too (product); one whose centroid rises above `eject_above` was
+  // thrown out of the top (ejected: removed, counted apart from the product).
+  double discharge_level = -std::numeric_limits<double>::infinity();
+  double eject_above = std::numeric_limits<double>::infinity();
 };
 
 // What the Simulation hands every engine at construction.

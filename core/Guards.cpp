@@ -68,10 +68,12 @@ double kinetic_energy(std::span<const Grain> grains, std::span<const Material> m
 namespace {
 
 // An open scene's grain outside the domain other than through its bottom. A grain below the
-// bottom is leaving through the discharge (Container): the Simulation takes it out as product
-// at its next sample step, and the check after the last step comes before that.
+// bottom, or below the discharge level, is leaving through the discharge and one above
+// eject_above was thrown out (Container): the Simulation takes it out at its next sample step,
+// and the check after the last step comes before that.
 void check_in_domain(const GuardContext& at, const Container& box, int dimension, const Grain& g) {
   const int up = dimension == 3 ? 2 : 1;
+  if (g.position[up] < box.discharge_level || g.position[up] > box.eject_above) return;
   bool out = false;
   for (int a = 0; a < dimension; ++a)
     out = out || g.position[a] > box.domain.hi[a] || (a != up && g.position[a] < box.domain.lo[a]);

@@ -133,6 +133,8 @@ SimulationState Simulation::saved_state() const {
   s.mass_fed = mass_fed_;
   s.product = product_;
   s.product_mass = product_mass_;
+  s.ejected = ejected_;
+  s.ejected_mass = ejected_mass_;
   if (!resumed_) {
     s.grains_initial = initial_grains_;
     s.mass_initial = initial_mass_;
@@ -192,6 +194,8 @@ void Simulation::adopt(const SimulationState& st, std::vector<Grain> grains) {
   mass_fed_ = st.mass_fed;
   product_ = st.product;
   product_mass_ = st.product_mass;
+  ejected_ = st.ejected;
+  ejected_mass_ = st.ejected_mass;
 }
 
 double Simulation::area() const {

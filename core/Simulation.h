@@ -96,6 +96,8 @@ struct SimulationState {
   double mass_fed = 0;
   std::vector<ProductGrain> product;
   double product_mass = 0;
+  std::vector<ProductGrain> ejected;  // grains thrown out of the top of the scene (Container)
+  double ejected_mass = 0;
 };
 
 // Where the settling of a packing (scenarios/Packing.h) stands after a step: what a
@@ -288,6 +290,9 @@ class Simulation {
   double mass_fed_ = 0;  // kg of rocks fed during the run
   std::vector<ProductGrain> product_;
   double product_mass_ = 0;
+  std::vector<ProductGrain> ejected_;
+  double ejected_mass_ = 0;
+  void discharge(const Grain& g, std::vector<ProductGrain>& to, double& mass);
 };
 
 }  // namespace crumble

@@ -3,6 +3,7 @@
 // grains that leave through the discharge as product.
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <stdexcept>
 
 #include "core/Measures.h"
@@ -48,26 +49,26 @@ void Simulation::update_open_scene() {
   sync_grains();
   const int up = ctx_.dimension == 3 ? 2 : 1;
   if (container_.open) {
-    // Grains whose centroid fell below the domain leave through the discharge.
+    // Grains whose centroid fell below the domain, or below the discharge level and out of it
+    // sideways, leave through the discharge; grains above the frame's top were thrown out.
     std::vector<Grain> kept;
     kept.reserve(grains_.size());
     for (auto& g : grains_) {
-      if (g.position[up] >= container_.domain.lo[up]) {
+      const double h = g.position[up];
+      bool sideways = false;
+      for (int a = 0; a < ctx_.dimension; ++a)
+        sideways = sideways || (a != up && (g.position[a] < container_.domain.lo[a] ||
+                                            g.position[a] > container_.domain.hi[a]));
+      if (h < container_.domain.lo[up] || (sideways && h < container_.discharge_level)) {
+        discharge(g, product_, product_mass_);
+      } else if (h > container_.eject_above) {
+        discharge(g, ejected_, ejected_mass_);
+        std::cerr << "crumble: warning: grain " << g.id << " (d = " << g.shape->equivalent_diameter()
+                  << " m) was thrown out of the top of the scene at t = " << time_
+                  << " s: removed, its mass counted as ejected (summary.json mass_ejected_kg)\n";
+      } else {
         kept.push_back(std::move(g));
-        continue;
       }
-      ProductGrain p;
-      p.id = g.id;
-      p.origin = g.origin;
-      p.generation = g.generation;
-      p.time = time_;
-      p.volume = g.shape->volume();
-      p.mass = g.mass(ctx_.materials[g.material].density);
-      p.diameter = g.shape->equivalent_diameter();
-      p.sieve = sieve_size(*g.shape);
-      product_mass_ += p.mass;
-      product_.push_back(p);
-      engine_->remove_grain(g.id);
     }
     grains_ = std::move(kept);
   }
@@ -89,6 +90,22 @@ void Simulation::update_open_scene() {
   ++fed_;
 }
 
+// Takes grain g out of the engine and records it in `to` (product or ejected), adding its mass.
+void Simulation::discharge(const Grain& g, std::vector<ProductGrain>& to, double& mass) {
+  ProductGrain p;
+  p.id = g.id;
+  p.origin = g.origin;
+  p.generation = g.generation;
+  p.time = time_;
+  p.volume = g.shape->volume();
+  p.mass = g.mass(ctx_.materials[g.material].density);
+  p.diameter = g.shape->equivalent_diameter();
+  p.sieve = sieve_size(*g.shape);
+  mass += p.mass;
+  to.push_back(p);
+  engine_->remove_grain(g.id);
+}
+
 void Simulation::finish_open_scene(RunSummary& sum) const {
   if (!container_.open && feed_.count == 0 && walls_.empty()) return;
   sum.extra["rocks_fed"] = static_cast<double>(fed_);
@@ -96,10 +113,12 @@ void Simulation::finish_open_scene(RunSummary& sum) const {
   if (!container_.open) return;
   sum.extra["product_grains"] = static_cast<double>(product_.size());
   sum.extra["product_mass_kg"] = product_mass_;
+  sum.extra["ejected_grains"] = static_cast<double>(ejected_.size());
+  sum.extra["mass_ejected_kg"] = ejected_mass_;
   // Mass budget of an open scene: what was fed (and present at the start) is in the engine,
-  // removed as fines, or left as product.
+  // removed as fines, left as product or was thrown out.
   const double in = sum.mass_initial + mass_fed_;
-  const double out = sum.mass_final + sum.mass_removed + product_mass_;
+  const double out = sum.mass_final + sum.mass_removed + product_mass_ + ejected_mass_;
   sum.extra["mass_budget_error_kg"] = out - in;
 }
 

@@ -106,14 +106,16 @@ namespace {
 
 // What an open scene has fed and discharged so far; a product grain as
 // [id, origin, generation, time, volume, mass, diameter, sieve].
+Json product_json(const std::vector<ProductGrain>& grains) {
+  Json out = Json::array();
+  for (const auto& p : grains) out.push_back({p.id, p.origin, p.generation, p.time, p.volume, p.mass, p.diameter, p.sieve});
+  return out;
+}
+
 Json open_scene_json(const SimulationState& st) {
-  Json product = Json::array();
-  for (const auto& p : st.product)
-    product.push_back({p.id, p.origin, p.generation, p.time, p.volume, p.mass, p.diameter, p.sieve});
-  return {{"rocks_fed", st.rocks_fed},
-          {"mass_fed", st.mass_fed},
-          {"product_mass", st.product_mass},
-          {"product", std::move(product)}};
+  return {{"rocks_fed", st.rocks_fed},          {"mass_fed", st.mass_fed},
+          {"product_mass", st.product_mass},    {"product", product_json(st.product)},
+          {"ejected_mass", st.ejected_mass},    {"ejected", product_json(st.ejected)}};
 }
 
 }  // namespace
@@ -209,15 +211,15 @@ Json checkpoint_json(Simulation& sim, const std::string& scenario, const Json& r
 
 namespace {
 
-// The product grains of a checkpoint's "open_scene" object (open_scene_json).
-std::vector<ProductGrain> read_product(const Config& oc) {
+// The product (or ejected) grains `key` of a checkpoint's "open_scene" object (open_scene_json).
+std::vector<ProductGrain> read_product(const Config& oc, const std::string& key) {
   std::vector<ProductGrain> out;
-  const Json& pr = oc.raw("product");
+  const Json& pr = oc.raw(key);
   const std::string form = "expected an array of [id, origin, generation, time, volume, mass, diameter, sieve]";
-  if (!pr.is_array()) oc.fail("product", form);
+  if (!pr.is_array()) oc.fail(key, form);
   for (std::size_t k = 0; k < pr.size(); ++k) {
     const Json& e = pr[k];
-    const std::string at = "product/" + std::to_string(k);
+    const std::string at = key + "/" + std::to_string(k);
     if (!e.is_array() || e.size() != 8) oc.fail(at, form);
     for (int i = 0; i < 3; ++i)
       if (!e[i].is_number_integer()) oc.fail(at, "id, origin and generation must be integers");
@@ -248,7 +250,12 @@ void read_scene_and_failures(const Config& s, SimulationState& st) {
     st.rocks_fed = oc.integer("rocks_fed", 0, 0);
     st.mass_fed = oc.number("mass_fed", 0, 0);
     st.product_mass = oc.number("product_mass", 0, 0);
-    st.product = read_product(oc);
+    st.product = read_product(oc, "product");
+    // Checkpoints written before grains could be ejected have none.
+    if (oc.has("ejected")) {
+      st.ejected_mass = oc.number("ejected_mass", 0, 0);
+      st.ejected = read_product(oc, "ejected");
+    }
   }
   if (s.has("analyses_failed")) {
     if (!s.is_object("analyses_failed")) s.fail("analyses_failed", "expected an object {reason: count}");

@@ -404,7 +404,9 @@ std::vector<SummaryKey> simulation_keys() {
       {"mass_fed_kg", "kg", "mass fed", "scenes with a feed or moving walls"},
       {"product_grains", "1", "grains that left through the discharge", "open scenes"},
       {"product_mass_kg", "kg", "their mass", "open scenes"},
-      {"mass_budget_error_kg", "kg", "(final + removed + product) − (initial + fed): 0 up to rounding",
+      {"ejected_grains", "1", "grains thrown out of the top of the scene (removed, not product)", "open scenes"},
+      {"mass_ejected_kg", "kg", "their mass", "open scenes"},
+      {"mass_budget_error_kg", "kg", "(final + removed + product + ejected) − (initial + fed): 0 up to rounding",
        "open scenes"}};
 }
 

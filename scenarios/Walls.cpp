@@ -195,6 +195,10 @@ PackingSpec jaw_crusher_scene(const Config& sc, int dim, Rng& rng) {
   spec.container.domain.lo = {-thick - 1.0, -j.discharge_depth, -1};
   spec.container.domain.hi = {g.Tx + thick + 1.0, std::max(spec.feed.spawn.y, g.H + j.hopper_height) + rmax + 3.0, 1};
   spec.container.height = spec.container.domain.hi.y - spec.container.domain.lo.y;
+  // Below the plates' bottoms a grain has passed the gap, wherever it leaves the domain; above
+  // the hopper (or the drop zone) it was thrown out of the crusher.
+  spec.container.discharge_level = 0;
+  spec.container.eject_above = std::max(spec.feed.spawn.y + rmax, g.H + j.hopper_height);
   spec.duration = j.cycles * 60.0 / j.rpm;
   spec.scene_figures = {{"jaw_plate_length_m", g.L},  {"jaw_plate_height_m", g.H},     {"jaw_css_m", j.css},
                         {"jaw_oss_m", j.css + j.throw_}, {"jaw_feed_opening_m", g.Tx}, {"jaw_cycles", j.cycles},

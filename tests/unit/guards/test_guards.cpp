@@ -101,6 +101,15 @@ TEST(Guards, OpenSceneGrainBelowTheBottomIsLeavingThroughTheDischarge) {
     EXPECT_NE(msg.find("outside the scene's domain"), std::string::npos) << p.x << " " << p.y << ": " << msg;
   }
   EXPECT_NE(check(3, {0.03, -0.2001, 0}), "");  // in 3D y is a side
+  // Below the discharge level a grain out sideways has passed the discharge; above eject_above
+  // it was thrown out of the top: both are taken out by the Simulation, neither fails.
+  open.discharge_level = 0;
+  open.eject_above = 1.5;
+  EXPECT_EQ(check(2, {-1.0001, -0.05, 0}), "");
+  EXPECT_EQ(check(2, {1.0001, -0.05, 0}), "");
+  EXPECT_EQ(check(2, {-1.0001, 1.6, 0}), "");
+  EXPECT_NE(check(2, {-1.0001, 0.05, 0}), "");  // between the two: through a wall
+  EXPECT_NE(check(2, {1.0001, 1.4, 0}), "");
 }
 
 TEST(Guards, DeepOverlapFailsAndNamesTheLimit) {

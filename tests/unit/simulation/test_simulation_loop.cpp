@@ -685,6 +685,67 @@ TEST(SimulationLoop, TinyGrainOutsideTheContainerLeavesAsFines) {
   EXPECT_THROW(run(0.5e-3), PhysicsGuardError);  // d = 1 mm: not tiny, the run stops
 }
 
+// An open scene's frame (Container::discharge_level, eject_above): a grain below the discharge
+// level out of the domain sideways leaves as product, one above eject_above is ejected; both
+// leave the engine, the summary counts them apart and the mass budget closes.
+TEST(SimulationLoop, OpenSceneGrainsLeaveAsProductOrEjected) {
+  EngineContext ctx;
+  SqueezeSetup u = squeeze_setup();
+  u.ss.guards.containment = true;
+  u.ss.max_steps = 3;
+  u.ls.mode = "none";
+  Simulation sim(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(), std::make_unique<WholeBuilder>(),
+                 ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  Container c;
+  c.open = true;
+  c.domain = {{-1, -1, -0.2}, {1, 1, 2}};
+  c.height = 2.2;
+  c.discharge_level = 0;
+  c.eject_above = 1.5;
+  sim.set_container(c);
+  const auto add = [&](Vec3 p, double r) {
+    Grain g;
+    g.shape = Shape::sphere(r);
+    g.position = p;
+    return sim.add_grain(g);
+  };
+  const GrainId stays = add({0.5, 0, 0.5}, 1e-2);
+  add({0.2, 1.2, -0.05}, 2e-2);  // below the discharge level, out sideways (y)
+  add({0.1, 0.1, 1.6}, 3e-2);    // above the frame's top
+  const RunSummary s = sim.run();
+  ASSERT_EQ(sim.grains().size(), 1u);
+  EXPECT_EQ(sim.grains()[0].id, stays);
+  const double rho = Material{}.density, k = rho * 4.0 / 3.0 * M_PI;
+  EXPECT_EQ(s.extra.at("product_grains"), 1);
+  EXPECT_NEAR(s.extra.at("product_mass_kg"), k * std::pow(2e-2, 3), 1e-12);
+  EXPECT_EQ(s.extra.at("ejected_grains"), 1);
+  EXPECT_NEAR(s.extra.at("mass_ejected_kg"), k * std::pow(3e-2, 3), 1e-12);
+  EXPECT_NEAR(s.extra.at("mass_budget_error_kg"), 0, 1e-15);
+  // A checkpoint carries them: the resumed run reports what the first one discharged.
+  const auto dir = fs::temp_directory_path() / "crumble_simulation_loop" / "ejected";
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  write_file_atomic(file, checkpoint_json(sim, "open").dump());
+  const Checkpoint cp = read_checkpoint(file, "open", 3);
+  Simulation resumed(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(),
+                     std::make_unique<WholeBuilder>(), ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  resumed.set_container(c);
+  resumed.resume(cp.state, cp.grains);
+  const RunSummary r = resumed.run();
+  EXPECT_EQ(r.extra.at("ejected_grains"), 1);
+  EXPECT_EQ(r.extra.at("mass_ejected_kg"), s.extra.at("mass_ejected_kg"));
+  EXPECT_EQ(r.extra.at("product_grains"), 1);
+  // Between the two levels, out sideways: through a wall, the run stops.
+  Simulation bad(std::make_unique<SqueezeEngine>(), std::make_unique<ThresholdModel>(), std::make_unique<WholeBuilder>(),
+                 ctx, u.ss, u.ls, u.sch, u.scr, 123);
+  bad.set_container(c);
+  Grain g;
+  g.shape = Shape::sphere(1e-2);
+  g.position = {0.2, 1.2, 0.5};
+  bad.add_grain(g);
+  EXPECT_THROW(bad.run(), PhysicsGuardError);
+}
+
 // An analysis or a fragment build that throws (a degenerate geometry) is not fatal: the
 // grain stays as it was, summary.json counts the failure by the error's leading word, and
 // the mass budget holds.
