@@ -17,7 +17,8 @@ by what the folder holds (each is written under a temporary name and renamed whe
     stress_strain.png     platen stress against axial strain (strain-controlled loading)
     product_psd.png       size distribution of the product (open scenes: jaw crusher)
   compare folder (comparison.csv): compare_ncl.png, compare_psd.png, compare_breakage.png,
-    compare_stress_strain.png, compare_load_displacement.png: each run's curves overlaid
+    compare_stress_strain.png, compare_load_displacement.png, compare_product_psd.png (open
+    scenes): each run's curves overlaid
   sweep folder (sweep.csv): pareto.png, relative error against wall time, the front marked;
     and the compare figures of its runs
 
@@ -493,19 +494,29 @@ def plot_run(F, d):
         ax.set_title(f"{name}: stress–strain")
         F.save(fig, d, "stress_strain.png")
 
+    rows = product_psd_rows(d)
+    if rows:
+        fig, ax = plt.subplots(figsize=(6.4, 4.6))
+        ax.plot([r["sieve_m"] * 1e3 for r in rows], [r["passing_percent"] for r in rows], marker="o", lw=1.6)
+        product_psd_axes(ax)
+        ax.set_title(f"{name}: product size distribution")
+        F.save(fig, d, "product_psd.png")
+
+
+def product_psd_rows(d):
+    """The rows of DIR/product_psd.csv with a sieve > 0, by sieve size; [] without the file."""
     prod = os.path.join(d, "product_psd.csv")
-    if os.path.exists(prod):
-        rows, _ = read_table(prod, required=("sieve_m", "passing_percent"))
-        rows = sorted([r for r in rows if r["sieve_m"] > 0], key=lambda r: r["sieve_m"])
-        if rows:
-            fig, ax = plt.subplots(figsize=(6.4, 4.6))
-            ax.plot([r["sieve_m"] * 1e3 for r in rows], [r["passing_percent"] for r in rows], marker="o", lw=1.6)
-            plain_log_axis(ax)
-            ax.set_xlabel("sieve size (mm, log scale)")
-            ax.set_ylabel("product passing by mass (%)")
-            ax.set_ylim(-2, 102)
-            ax.set_title(f"{name}: product size distribution")
-            F.save(fig, d, "product_psd.png")
+    if not os.path.exists(prod):
+        return []
+    rows, _ = read_table(prod, required=("sieve_m", "passing_percent"))
+    return sorted([r for r in rows if r["sieve_m"] > 0], key=lambda r: r["sieve_m"])
+
+
+def product_psd_axes(ax):
+    plain_log_axis(ax)
+    ax.set_xlabel("sieve size (mm, log scale)")
+    ax.set_ylabel("product passing by mass (%)")
+    ax.set_ylim(-2, 102)
 
 
 def spread(values):
@@ -725,6 +736,18 @@ def plot_compare(F, d, title):
         ax.legend(loc="upper left")
         ax.set_title(f"{title}: final particle size distributions")
         F.save(fig, d, "compare_psd.png")
+    # Open scenes: the product of each run (Harmon et al. 2020 Fig. 8 for the jaw crusher).
+    products = [(label, product_psd_rows(f)) for label, f, _, _ in data]
+    products = [(label, rows) for label, rows in products if rows]
+    if products:
+        fig, ax = plt.subplots(figsize=(7.2, 4.8))
+        for i, (label, rows) in enumerate(products):
+            ax.plot([r["sieve_m"] * 1e3 for r in rows], [r["passing_percent"] for r in rows], marker="o", ms=3,
+                    lw=1.5, color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], label=label)
+        product_psd_axes(ax)
+        ax.legend(loc="upper left")
+        ax.set_title(f"{title}: product size distributions")
+        F.save(fig, d, "compare_product_psd.png")
 
 
 def plot_sweep(F, d, title):

@@ -199,6 +199,19 @@ TEST(Plots, SweepFolderGetsTheErrorCostFront) {
   }
 }
 
+// A compare of jaw-crusher runs overlays their products (Harmon et al. 2020 Fig. 8): a tiny
+// crusher (unbreakable 30-40 mm rocks, 6 cycles) at two closed side settings.
+TEST(Plots, JawCompareOverlaysTheProducts) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  const fs::path d = fresh_dir("jaw_compare");
+  const auto r = run_cli("compare " + std::string(CRUMBLE_SOURCE_DIR) + "/scenarios/jaw_crusher_2d_quick.json --out " +
+                         d.string() + " --vary scene.css=0.05,0.08 --threads 1 --set breakage.type=none"
+                         " --set scene.cycles=6 --set scene.rocks.count=6 --set 'scene.rocks.diameter=[0.03,0.04]'");
+  ASSERT_EQ(r.status, 0) << r.output;
+  expect_png(d / "compare_product_psd.png");
+  EXPECT_NE(r.output.find("compare_product_psd.png"), std::string::npos) << r.output;
+}
+
 // A level the loading did not reach is never shown as reached. lsdem's measured stress rings
 // above the ramp: in this 2D run (sampled every 10 steps, stopped at step 700 while the ramp
 // commands 280 kPa) it passes 300 kPa from step 640 on. The 300 kPa table is then the final
