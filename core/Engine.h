@@ -38,6 +38,13 @@ struct Container {
   // thrown out of the top (ejected: removed, counted apart from the product).
   double discharge_level = -std::numeric_limits<double>::infinity();
   double eject_above = std::numeric_limits<double>::infinity();
+  // An open scene: p is outside the domain along an axis other than the vertical one.
+  bool beside_domain(const Vec3& p, int dimension) const {
+    const int up = dimension == 3 ? 2 : 1;
+    for (int a = 0; a < dimension; ++a)
+      if (a != up && (p[a] < domain.lo[a] || p[a] > domain.hi[a])) return true;
+    return false;
+  }
 };
 
 // What the Simulation hands every engine at construction.

@@ -74,10 +74,7 @@ namespace {
 void check_in_domain(const GuardContext& at, const Container& box, int dimension, const Grain& g) {
   const int up = dimension == 3 ? 2 : 1;
   if (g.position[up] < box.discharge_level || g.position[up] > box.eject_above) return;
-  bool out = false;
-  for (int a = 0; a < dimension; ++a)
-    out = out || g.position[a] > box.domain.hi[a] || (a != up && g.position[a] < box.domain.lo[a]);
-  if (!out) return;
+  if (!box.beside_domain(g.position, dimension) && g.position[up] <= box.domain.hi[up]) return;
   std::ostringstream os;
   os << "grain " << g.id << " (d = " << g.shape->equivalent_diameter() << " m) has its centroid at ("
      << g.position.x << ", " << g.position.y;

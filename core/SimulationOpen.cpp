@@ -55,11 +55,8 @@ void Simulation::update_open_scene() {
     kept.reserve(grains_.size());
     for (auto& g : grains_) {
       const double h = g.position[up];
-      bool sideways = false;
-      for (int a = 0; a < ctx_.dimension; ++a)
-        sideways = sideways || (a != up && (g.position[a] < container_.domain.lo[a] ||
-                                            g.position[a] > container_.domain.hi[a]));
-      if (h < container_.domain.lo[up] || (sideways && h < container_.discharge_level)) {
+      if (h < container_.domain.lo[up] ||
+          (h < container_.discharge_level && container_.beside_domain(g.position, ctx_.dimension))) {
         discharge(g, product_, product_mass_);
       } else if (h > container_.eject_above) {
         discharge(g, ejected_, ejected_mass_);
