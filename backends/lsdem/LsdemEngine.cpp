@@ -948,7 +948,11 @@ void LsdemEngine::apply_body_loads() {
   for (auto& b : bodies_) {
     b.f = ctx_.gravity * (b.md / s_.mass_scale);  // the weight of the true mass
     b.t = {};
-    const double c = s_.global_damping * global_damping_scale_ + relax_damping_;
+    // Global damping acts on the mass before selective scaling, so that a scaled grain drifts
+    // under a steady force as fast as it would unscaled (the added mass is inertia only);
+    // the relaxation's damping acts on the stepped mass (it is there for stability).
+    // (c·m = C_g·m_before + relax·m, the stepped m = m_before·sel.)
+    const double c = s_.global_damping * global_damping_scale_ / b.sel + relax_damping_;
     if (c > 0) {
       b.f -= b.v * (c * b.m);
       if (ctx_.dimension == 2) {

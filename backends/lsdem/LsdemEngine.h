@@ -40,7 +40,11 @@
 // the packing the engine first steps (the initial packing: with a fraction ≤ 1 none of its
 // grains is scaled; the fragments born later are). The factor is fixed when the grain is
 // added. Weight uses the true mass (gravity never sees the added mass), and so do the
-// Simulation's mass budget and the platen's mass rule. The added mass (s − 1)·m per grain is
+// Simulation's mass budget and the platen's mass rule. Global damping (−C_g·m·v, −C_g·I·ω)
+// acts on the mass and inertia before the factor: under a steady force a scaled grain drifts
+// as fast as the unscaled one, so the added mass is inertia only (damping the added mass too
+// held the fragments back: the 2D Harmon oedometer carried 40 % more stress over its first
+// 5 % of strain, docs/validation.md). The added mass (s − 1)·m per grain is
 // reported (summary_figures: added mass in kg and as a fraction of the grains' true mass, the
 // largest factor, the grains scaled), and its kinetic energy (added_kinetic_energy) is added
 // to the grains' kinetic energy that the energy guard bounds (core/Guards.h).

@@ -1,8 +1,8 @@
 // lsdem selective mass scaling (engine.selective_dt / selective_dt_fraction):
 // a grain below the target step gets mass and inertia × (target / own step)² — its own step
 // is then the target (closed form); its acceleration under a force is F/(s·m) and its weight
-// stays m·g; the added mass and its kinetic energy are reported; an inactive target changes
-// no bit; the state survives save_state / restore_state exactly.
+// stays m·g, and global damping acts on m; the added mass and its kinetic energy are
+// reported; an inactive target changes no bit; the state survives save_state / restore_state exactly.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -144,6 +144,37 @@ TEST(LsdemSelective, WeightUsesTheTrueMass) {
   EXPECT_NEAR(g[0].velocity.z / (-9.81 / factor * dt), 1.0, 1e-12);
   for (int i = 0; i < 20000; ++i) e.step(dt);
   EXPECT_NEAR(e.floor_force() / (kRho * sh->volume() * 9.81), 1.0, 0.01);
+}
+
+// Global damping acts on the mass before the factor: a free grain loses C_g·Δt/s of its
+// velocity and spin per step (closed form of the leapfrog update with a = −(C_g/s)·v), so
+// that under a steady force it drifts at F/(C_g·m) as unscaled; the unscaled grain loses
+// C_g·Δt. (Damping the added mass too held the fragments of the 2D Harmon oedometer back.)
+TEST(LsdemSelective, GlobalDampingActsOnTheMassBeforeScaling) {
+  LsdemSettings s;
+  s.kn = 1e6;
+  s.global_damping = 50;
+  const auto sh = sphere(0.2, 0.02, 400);
+  const double factor = 9;
+  LsdemEngine plain(s, context());
+  s.selective_dt = 3 * own_step(s, sh);
+  LsdemEngine e(s, context());
+  const double dt = 1e-4;
+  for (LsdemEngine* x : {&plain, &e}) {
+    Grain g = grain(0, sh, {0, 0, 5});
+    g.velocity = {0.3, -0.2, 0.1};
+    g.angular_velocity = {0, 0, 2};
+    x->add_grain(g);
+    x->step(dt);
+  }
+  std::vector<Grain> a(1), b(1);
+  a[0].id = b[0].id = 0;
+  plain.read_state(a);
+  e.read_state(b);
+  EXPECT_NEAR(a[0].velocity.x / 0.3, 1 - s.global_damping * dt, 1e-12);
+  EXPECT_NEAR(b[0].velocity.x / 0.3, 1 - s.global_damping * dt / factor, 1e-12);
+  EXPECT_NEAR(b[0].velocity.y / -0.2, 1 - s.global_damping * dt / factor, 1e-12);
+  EXPECT_NEAR(b[0].angular_velocity.z / 2, 1 - s.global_damping * dt / factor, 1e-6);
 }
 
 // A target below every grain's own step scales nothing, and the run is the unscaled run bit
