@@ -16,8 +16,9 @@ by what the folder holds (each is written under a temporary name and renamed whe
     load_displacement.png platen force against platen displacement (single-grain scenes)
     stress_strain.png     platen stress against axial strain (strain-controlled loading)
     product_psd.png       size distribution of the product (open scenes: jaw crusher)
-  compare folder (comparison.csv): compare_ncl.png, compare_psd.png, compare_breakage.png,
-    compare_stress_strain.png, compare_load_displacement.png, compare_product_psd.png (open
+  compare folder (comparison.csv): compare_ncl.png, compare_psd.png, compare_psd_levels.png
+    (one panel per psd level every run reached), compare_shape.png, compare_breakage.png,
+    compare_stress_strain.png (stress and void ratio), compare_load_displacement.png, compare_product_psd.png (open
     scenes): each run's curves overlaid
   sweep folder (sweep.csv): pareto.png, relative error against wall time, the front marked;
     and the compare figures of its runs
@@ -702,9 +703,9 @@ def plot_compare(F, d, title):
         overlay("compare_load_displacement.png", "platen force (N)", load_disp, xlabel="platen displacement (µm)",
                 what="load–displacement")
     if strain:
-        overlay("compare_stress_strain.png", "platen stress (MPa)",
-                lambda s: ([100 * r["axial_strain"] for r in s], [r["platen_stress_Pa"] / 1e6 for r in s]),
-                xlabel="axial strain (%)", what="stress–strain")
+        compare_stress_strain(F, d, title, data, colors, styles)
+    compare_psd_levels(F, d, title, data, colors, styles)
+    compare_shape(F, d, title, data, colors, styles)
     # Final PSD of each run (initial of the first run, dotted, for reference).
     finals, initial = {}, None
     for label, f, _, _ in data:
@@ -748,6 +749,93 @@ def plot_compare(F, d, title):
         ax.legend(loc="upper left")
         ax.set_title(f"{title}: product size distributions")
         F.save(fig, d, "compare_product_psd.png")
+
+
+def compare_stress_strain(F, d, title, data, colors, styles):
+    """Platen stress and void ratio against axial strain, every run overlaid."""
+    fig, (a1, a2) = F.plt.subplots(1, 2, figsize=(12.4, 4.6))
+    for i, (label, _, s, _) in enumerate(data):
+        x = [100 * r["axial_strain"] for r in s]
+        kw = dict(lw=1.3, color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], label=label)
+        a1.plot(x, [r["platen_stress_Pa"] / 1e6 for r in s], **kw)
+        a2.plot(x, [r["void_ratio"] for r in s], **kw)
+    for ax, y in ((a1, "platen stress (MPa)"), (a2, "void ratio e (–)")):
+        ax.set_xlabel("axial strain (%)")
+        ax.set_ylabel(y)
+        ax.legend(loc="best")
+    fig.suptitle(f"{title}: stress and void ratio against strain")
+    F.save(fig, d, "compare_stress_strain.png")
+
+
+def common_levels(tables):
+    """The psd.csv levels (stress or strain) that every run reached, in the first run's order."""
+    levels = [k for k in tables[0] if k.startswith(("level_", "strain_")) and "not_reached" not in k]
+    return [k for k in levels if all(k in t for t in tables)]
+
+
+def compare_psd_levels(F, d, title, data, colors, styles):
+    """One panel per psd.csv level every run reached (psd_at_stress / psd_at_strain), the runs
+    overlaid, the initial distribution dotted: how each run's grading evolves, side by side."""
+    runs = [(label, read_psd(os.path.join(f, "psd.csv"))) for label, f, _, _ in data
+            if os.path.exists(os.path.join(f, "psd.csv"))]
+    if len(runs) < len(data) or not runs:
+        return
+    levels = common_levels([t for _, t in runs])
+    if not levels:
+        return
+    fig, axes = F.plt.subplots(1, len(levels), figsize=(4.6 * len(levels), 4.4), squeeze=False)
+    initial = runs[0][1].get("initial")
+    for ax, level in zip(axes[0], levels):
+        if initial:
+            rows = sorted(initial, key=lambda r: r["sieve_diameter_m"])
+            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
+                    color="0.5", ls=":", lw=1.5, label="initial")
+        for i, (label, t) in enumerate(runs):
+            rows = sorted(t[level], key=lambda r: r["sieve_diameter_m"])
+            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
+                    color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], marker="o", ms=2.5, lw=1.3,
+                    label=label)
+        plain_log_axis(ax)
+        ax.set_xlabel("sieve diameter (mm, log scale)")
+        ax.set_ylabel("passing by mass (%)")
+        ax.set_ylim(-2, 102)
+        ax.set_title(psd_label(level, t[level]))
+        ax.legend(loc="upper left", fontsize=8)
+    fig.suptitle(f"{title}: particle size distributions")
+    F.save(fig, d, "compare_psd_levels.png")
+
+
+def compare_shape(F, d, title, data, colors, styles):
+    """The grains' mean shape descriptors (shape.csv) against strain or stress, runs overlaid."""
+    means = []
+    for label, f, _, eff in data:
+        path = os.path.join(f, "shape.csv")
+        if not os.path.exists(path):
+            return
+        dim = eff.get("dimension", 3) if isinstance(eff, dict) else 3
+        cols = ("mean_circularity", "mean_aspect_ratio") if dim == 2 else ("mean_sphericity", "mean_EI", "mean_FI")
+        rows, _ = read_table(path, required=("axial_strain", "platen_stress_Pa") + cols,
+                             numeric=("axial_strain", "platen_stress_Pa"))
+        means.append((label, rows, cols))
+    if not means or len({m[2] for m in means}) != 1 or all(len(m[1]) < 2 for m in means):
+        return
+    strain = all(loading_mode(e) == "strain_rate" for _, _, _, e in data)
+    cols = means[0][2]
+    fig, axes = F.plt.subplots(1, len(cols), figsize=(5.6 * len(cols), 4.4), squeeze=False)
+    names = {"mean_circularity": "mean circularity 4πA/P² (Harmon et al. 2020, eq. 23)",
+             "mean_aspect_ratio": "mean aspect ratio", "mean_sphericity": "mean sphericity",
+             "mean_EI": "mean elongation index EI", "mean_FI": "mean flatness index FI"}
+    for ax, c in zip(axes[0], cols):
+        for i, (label, rows, _) in enumerate(means):
+            pts = [(100 * r["axial_strain"] if strain else r["platen_stress_Pa"] / 1e6, r[c]) for r in rows
+                   if isinstance(r[c], float) and math.isfinite(r[c])]  # empty where no grain has a value
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1.3, color=colors[i % len(colors)],
+                    ls=styles[(i // len(colors)) % 4], label=label)
+        ax.set_xlabel("axial strain (%)" if strain else "platen stress (MPa)")
+        ax.set_ylabel(names[c])
+        ax.legend(loc="best", fontsize=8)
+    fig.suptitle(f"{title}: grain shape")
+    F.save(fig, d, "compare_shape.png")
 
 
 def plot_sweep(F, d, title):

@@ -5,6 +5,7 @@
 // folder, and the messages when a CSV is missing or garbled or no matplotlib is there.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -260,4 +261,54 @@ TEST(Plots, ALevelNotReachedIsLabelledWithTheStressReached) {
   std::snprintf(legend, sizeof legend, "final (%.3g MPa; 0.3 MPa not reached)", std::stod(final_stress) / 1e6);
   EXPECT_NE(py.output.find(legend), std::string::npos) << legend << " not in " << py.output;
   EXPECT_EQ(py.output.find("at 0.3 MPa"), std::string::npos) << py.output;
+}
+
+namespace {
+
+// A run folder of a strain-controlled 2D oedometer, written by hand: five samples, the size
+// distribution at 5 % strain and (when `reached_10`) at 10 %, the mean shapes.
+void write_strain_run(const fs::path& d, double scale, bool reached_10) {
+  fs::create_directories(d);
+  std::ofstream(d / "effective_scenario.json") << R"({"name": "synthetic", "dimension": 2, "loading": {"mode": "strain_rate"}})";
+  std::ofstream s(d / "series.csv");
+  s << "time_s,platen_stress_Pa,axial_strain,void_ratio,grains,breakage_events\n";
+  std::ofstream sh(d / "shape.csv");
+  sh << "time_s,step,axial_strain,platen_stress_Pa,grains,mean_circularity,mean_aspect_ratio,mean_sieve_size_m\n";
+  for (int i = 0; i < 5; ++i) {
+    const double e = 0.025 * i;
+    s << 0.01 * i << "," << scale * 1e7 * i << "," << e << "," << 0.2 - e << "," << 10 + 5 * i << "," << 5 * i << "\n";
+    sh << 0.01 * i << "," << 100 * i << "," << e << "," << scale * 1e7 * i << "," << 10 + 5 * i << ","
+       << 0.9 - 0.05 * i * scale << "," << 0.8 - 0.04 * i << "," << 1e-3 << "\n";
+  }
+  std::ofstream p(d / "psd.csv");
+  p << "label,platen_stress_Pa,sieve_diameter_m,percent_passing_by_mass,axial_strain,step\n";
+  const std::vector<std::string> labels = {"initial", "strain_0.05",
+                                           reached_10 ? "strain_0.1" : "strain_0.1_not_reached_final_at_0.08", "final"};
+  for (std::size_t k = 0; k < labels.size(); ++k)
+    for (int j = 0; j < 6; ++j)
+      p << labels[k] << "," << 1e7 * k << "," << 2e-4 * (j + 1) << "," << std::min(100.0, (j + 1) * (10.0 + 15 * k * scale))
+        << "," << 0.05 * k << "," << 100 * k << "\n";
+}
+
+}  // namespace
+
+// A compare of strain-controlled runs: stress and void ratio against strain, the size
+// distributions at each psd level every run reached (10 % is left out: one run stopped at
+// 8 %), and the mean shapes against strain.
+TEST(Plots, StrainCompareDrawsLevelsShapesAndVoidRatio) {
+  SKIP_WITHOUT_MATPLOTLIB();
+  const fs::path d = fresh_dir("strain_compare");
+  fs::create_directories(d);
+  std::ofstream(d / "comparison.csv") << "breakage.criterion,folder,status\nvon_mises,a,ok\ntresca,b,ok\n";
+  write_strain_run(d / "a", 1.0, true);
+  write_strain_run(d / "b", 1.3, false);
+  const auto r = run_cli("plot " + d.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* f : {"compare_stress_strain.png", "compare_psd_levels.png", "compare_shape.png"}) expect_png(d / f);
+  const auto py = run_cli("--version >/dev/null; python3 -c \"import sys; sys.path.insert(0, '" +
+                          std::string(CRUMBLE_SOURCE_DIR) + "/scripts'); import crumble_plot as p; print(p.common_levels(["
+                          "p.read_psd('" + (d / "a/psd.csv").string() + "'), p.read_psd('" + (d / "b/psd.csv").string() +
+                          "')]))\"");
+  ASSERT_EQ(py.status, 0) << py.output;
+  EXPECT_NE(py.output.find("['strain_0.05']"), std::string::npos) << py.output;
 }
