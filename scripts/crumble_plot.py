@@ -17,7 +17,7 @@ by what the folder holds (each is written under a temporary name and renamed whe
     stress_strain.png     platen stress against axial strain (strain-controlled loading)
     product_psd.png       size distribution of the product (open scenes: jaw crusher)
   compare folder (comparison.csv): compare_ncl.png, compare_psd.png, compare_psd_levels.png
-    (one panel per psd level every run reached), compare_shape.png, compare_breakage.png,
+    (one panel per psd level a run reached), compare_shape.png, compare_breakage.png,
     compare_stress_strain.png (stress and void ratio), compare_load_displacement.png, compare_product_psd.png (open
     scenes): each run's curves overlaid
   sweep folder (sweep.csv): pareto.png, relative error against wall time, the front marked;
@@ -767,20 +767,22 @@ def compare_stress_strain(F, d, title, data, colors, styles):
     F.save(fig, d, "compare_stress_strain.png")
 
 
-def common_levels(tables):
-    """The psd.csv levels (stress or strain) that every run reached, in the first run's order."""
-    levels = [k for k in tables[0] if k.startswith(("level_", "strain_")) and "not_reached" not in k]
-    return [k for k in levels if all(k in t for t in tables)]
+def reached_levels(tables):
+    """The psd.csv levels (stress or strain) that at least one run reached, in order of first
+    appearance (a table labelled not_reached is the final state, not the level)."""
+    levels = []
+    for t in tables:
+        levels += [k for k in t if k.startswith(("level_", "strain_")) and "not_reached" not in k and k not in levels]
+    return levels
 
 
 def compare_psd_levels(F, d, title, data, colors, styles):
-    """One panel per psd.csv level every run reached (psd_at_stress / psd_at_strain), the runs
-    overlaid, the initial distribution dotted: how each run's grading evolves, side by side."""
+    """One panel per psd.csv level a run reached (psd_at_stress / psd_at_strain), the runs that
+    reached it overlaid on the initial distribution (dotted), the others named as not reaching
+    it: how each run's grading evolves, side by side."""
     runs = [(label, read_psd(os.path.join(f, "psd.csv"))) for label, f, _, _ in data
             if os.path.exists(os.path.join(f, "psd.csv"))]
-    if len(runs) < len(data) or not runs:
-        return
-    levels = common_levels([t for _, t in runs])
+    levels = reached_levels([t for _, t in runs])
     if not levels:
         return
     fig, axes = F.plt.subplots(1, len(levels), figsize=(4.6 * len(levels), 4.4), squeeze=False)
@@ -791,15 +793,21 @@ def compare_psd_levels(F, d, title, data, colors, styles):
             ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
                     color="0.5", ls=":", lw=1.5, label="initial")
         for i, (label, t) in enumerate(runs):
+            if level not in t:
+                continue
             rows = sorted(t[level], key=lambda r: r["sieve_diameter_m"])
             ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
                     color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], marker="o", ms=2.5, lw=1.3,
                     label=label)
+        missing = [label for label, t in runs if level not in t]
+        if missing:
+            ax.text(0.98, 0.03, "not reached:\n" + "\n".join(missing), transform=ax.transAxes, ha="right",
+                    va="bottom", fontsize=7, color="0.35")
         plain_log_axis(ax)
         ax.set_xlabel("sieve diameter (mm, log scale)")
         ax.set_ylabel("passing by mass (%)")
         ax.set_ylim(-2, 102)
-        ax.set_title(psd_label(level, t[level]))
+        ax.set_title(psd_label(level, next(t[level] for _, t in runs if level in t)))
         ax.legend(loc="upper left", fontsize=8)
     fig.suptitle(f"{title}: particle size distributions")
     F.save(fig, d, "compare_psd_levels.png")
