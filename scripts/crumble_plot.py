@@ -319,13 +319,17 @@ def psd_label(label, rows):
     return base
 
 
+def psd_xy(rows):
+    """(sieve diameters in mm, passing %) of one psd.csv table, finest sieve first."""
+    rows = sorted(rows, key=lambda r: r["sieve_diameter_m"])
+    return [r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows]
+
+
 def plot_psd_axes(ax, tables, labeller=psd_label, linestyles=None):
     n = len(tables)
     cmap = __import__("matplotlib").colormaps["viridis"]
     for i, (label, rows) in enumerate(tables.items()):
-        rows = sorted(rows, key=lambda r: r["sieve_diameter_m"])
-        x = [r["sieve_diameter_m"] * 1e3 for r in rows]
-        y = [r["percent_passing_by_mass"] for r in rows]
+        x, y = psd_xy(rows)
         color = cmap(0.9 * i / max(1, n - 1))
         ax.plot(x, y, marker="o", ms=3, lw=1.6, color=color, label=labeller(label, rows),
                 ls=(linestyles[i] if linestyles else "-"))
@@ -719,15 +723,12 @@ def plot_compare(F, d, title):
     if finals:
         fig, ax = plt.subplots(figsize=(7.2, 4.8))
         if initial:
-            rows = sorted(initial, key=lambda r: r["sieve_diameter_m"])
-            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
-                    color="0.5", ls=":", lw=1.5, label="initial")
+            ax.plot(*psd_xy(initial), color="0.5", ls=":", lw=1.5, label="initial")
         for i, (label, rows) in enumerate(finals.items()):
-            rows = sorted(rows, key=lambda r: r["sieve_diameter_m"])
             # The stress each run ended at: runs stopped early are not shown as at the full load.
             s = rows[0].get("platen_stress_Pa", math.nan) if rows else math.nan
             at = f" ({s / 1e6:.3g} MPa)" if math.isfinite(s) else ""
-            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
+            ax.plot(*psd_xy(rows),
                     color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], marker="o", ms=3, lw=1.5,
                     label=f"{label}, final{at}")
         plain_log_axis(ax)
@@ -789,14 +790,11 @@ def compare_psd_levels(F, d, title, data, colors, styles):
     initial = runs[0][1].get("initial")
     for ax, level in zip(axes[0], levels):
         if initial:
-            rows = sorted(initial, key=lambda r: r["sieve_diameter_m"])
-            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
-                    color="0.5", ls=":", lw=1.5, label="initial")
+            ax.plot(*psd_xy(initial), color="0.5", ls=":", lw=1.5, label="initial")
         for i, (label, t) in enumerate(runs):
             if level not in t:
                 continue
-            rows = sorted(t[level], key=lambda r: r["sieve_diameter_m"])
-            ax.plot([r["sieve_diameter_m"] * 1e3 for r in rows], [r["percent_passing_by_mass"] for r in rows],
+            ax.plot(*psd_xy(t[level]),
                     color=colors[i % len(colors)], ls=styles[(i // len(colors)) % 4], marker="o", ms=2.5, lw=1.3,
                     label=label)
         missing = [label for label, t in runs if level not in t]
