@@ -152,6 +152,14 @@ const std::set<std::string> kResumeMayDiffer = {
     "/engine/deep_erp",         "/simulation/guards", "/engine/concave_shapes", "/engine/concavity_tolerance",
     "/engine/max_convex_pieces", "/screening/moment_couples"};
 
+// Compared by none of the above: the scenario's description (text; a file whose description
+// was edited since the run still continues it, and the change is not reported).
+std::set<std::string> resume_ignores() {
+  std::set<std::string> s = kResumeMayDiffer;
+  s.insert("/description");
+  return s;
+}
+
 // Appends {"path", "was", "now"} for every leaf (or whole value, where the types differ) in
 // which `was` and `now` differ below `path`.
 void leaf_changes(const Json& was, const Json& now, const std::string& path, Json& out) {
@@ -207,14 +215,12 @@ std::string no_checkpoint_message(const std::string& out, const Scenario& sc) {
          " of loading); nothing after its packing was saved" + again + sooner;
 }
 
-// Refuses a resume whose effective scenario differs from the run's but for kResumeMayDiffer;
-// returns the allowed changes (resume_changes).
-Json check_resumable(const std::string& out, const Scenario& sc) {
-  const Json& effective = sc.effective;
+// Refuses a run in `out` whose effective scenario (effective_scenario.json) differs from
+// `effective` but for kResumeMayDiffer; returns the allowed changes (resume_changes).
+Json check_same_scenario(const std::string& out, const Json& effective) {
   const fs::path dir(out);
-  if (!fs::exists(dir / "checkpoint.json")) throw InputError(no_checkpoint_message(out, sc));
   std::ifstream in(dir / "effective_scenario.json");
-  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
+  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json: the folder holds no run");
   std::stringstream ss;
   ss << in.rdbuf();
   Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
@@ -227,7 +233,7 @@ Json check_resumable(const std::string& out, const Scenario& sc) {
     before = build_scenario(before, opt).effective;
   } catch (const std::exception&) {
   }
-  const std::string d = first_difference(before, effective, "", kResumeMayDiffer);
+  const std::string d = first_difference(before, effective, "", resume_ignores());
   if (d.empty()) return resume_changes(before, effective);
   auto show = [&](const Json& j) {
     try {
@@ -245,6 +251,15 @@ Json check_resumable(const std::string& out, const Scenario& sc) {
                    "/engine/concave_shapes, /engine/concavity_tolerance, /engine/max_convex_pieces, "
                    "/screening/moment_couples and /simulation/guards may change). Use the same file and --set options, or start a new run "
                    "in another folder");
+}
+
+// Refuses a resume without a checkpoint, or whose effective scenario differs from the run's
+// but for kResumeMayDiffer; returns the allowed changes (resume_changes).
+Json check_resumable(const std::string& out, const Scenario& sc) {
+  if (!fs::exists(fs::path(out) / "checkpoint.json")) throw InputError(no_checkpoint_message(out, sc));
+  if (!fs::exists(fs::path(out) / "effective_scenario.json"))
+    throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
+  return check_same_scenario(out, sc.effective);
 }
 
 // packing_settle_steps of the run being resumed (its last summary.json), -1 when unknown.
@@ -651,6 +666,8 @@ Scenario build_request(const RunRequest& req) {
   opt.source_name = req.source_name;
   return build_scenario(request_document(req), opt);
 }
+
+void check_same_run(const RunRequest& req) { check_same_scenario(req.out, build_request(req).effective); }
 
 RunResult run_pipeline(const RunRequest& req) {
   try {

@@ -71,6 +71,11 @@ nlohmann::json request_document(const RunRequest& req);
 // and `compare`'s up-front check do). Throws ConfigError for any input problem.
 Scenario build_request(const RunRequest& req);
 
+// Refuses (InputError naming the first differing JSON path) when the run in req.out was run
+// with another effective scenario than req builds, but for the settings a --resume may change
+// (threads, max_steps, ...). What `compare --resume` checks of a run it keeps or continues.
+void check_same_run(const RunRequest& req);
+
 // Runs a request. Bad input (ConfigError, InputError, std::invalid_argument) is thrown, before
 // anything is written wherever it can be known then; a failure while running is returned
 // (status 1 and its reason, nothing thrown); an interrupted run returns 130 / 143 with every

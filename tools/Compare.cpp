@@ -382,7 +382,8 @@ pid_t spawn(const RunRequest& req, const std::string& log) {
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error(std::string("cannot start a run (fork): ") + std::strerror(errno));
   if (pid > 0) return pid;
-  const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  // A resumed run's log goes on after what the run printed before.
+  const int fd = open(log.c_str(), O_WRONLY | O_CREAT | (req.resume ? O_APPEND : O_TRUNC), 0644);
   if (fd >= 0) {
     dup2(fd, 1);
     dup2(fd, 2);
@@ -469,6 +470,41 @@ void prepare_compare_out(const std::string& out, bool force, const std::vector<s
   }
   fs::create_directories(fs::path(out) / "logs", ec);
   if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
+}
+
+// --resume: `out` must hold this comparison (its packing.json or a run folder of one of its
+// combinations) and no run folder of another.
+void check_resume_out(const std::string& out, const std::vector<std::string>& folders) {
+  std::error_code ec;
+  if (!fs::is_directory(out, ec))
+    throw InputError("--out " + out + " --resume: no such folder, nothing to resume; run the comparison without --resume");
+  const std::set<std::string> mine(folders.begin(), folders.end());
+  bool found = false;
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string n = e.path().filename().string();
+    if (n == "packing.json" || mine.count(n)) found = true;
+    if (e.is_directory() && !mine.count(n) && fs::exists(e.path() / "effective_scenario.json"))
+      throw InputError("--out " + out + " --resume: the folder holds the run '" + n +
+                       "', which is none of this comparison's combinations; resume with the --vary options the "
+                       "comparison was started with");
+  }
+  if (!found)
+    throw InputError("--out " + out + " --resume: the folder holds no comparison (no packing.json, no run folder of "
+                     "these combinations); run it without --resume");
+  fs::create_directories(fs::path(out) / "logs", ec);
+  if (ec) throw InputError("--out " + out + ": cannot create directory: " + ec.message());
+}
+
+// How --resume finds a combination's folder: no run, a run that finished (kept), one that
+// stopped with a checkpoint (continued from it), or one that stopped before its first
+// checkpoint (started again).
+enum class Previous { none, finished, resumable, restart };
+
+Previous previous_run(const fs::path& folder) {
+  if (!fs::exists(folder / "effective_scenario.json")) return Previous::none;
+  const Json s = read_summary(folder / "summary.json");
+  if (s.is_object() && !s.value("interrupted", false)) return Previous::finished;
+  return fs::exists(folder / "checkpoint.json") ? Previous::resumable : Previous::restart;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -578,6 +614,20 @@ int wait_forwarding_stop(pid_t pid) {
   }
 }
 
+// DIR/packing.json as the packing of every combination: its file, hash and header line.
+void use_shared_packing(const fs::path& dir, std::optional<std::string>& packing_file, std::string& packing_hash,
+                        std::vector<std::string>& header) {
+  packing_file = fs::absolute(dir / "packing.json").string();
+  packing_hash = file_sha256(*packing_file);
+  const Json ps = read_summary(dir / "packing" / "summary.json");
+  header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
+                   (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
+                   fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
+                   " s); every combination starts from packing.json, SHA-256 " + packing_hash +
+                   ". A combination on another engine first relaxes it on its own engine under the settling stress "
+                   "(packing.relax auto; what it did is in its summary.json, relax_*).");
+}
+
 // The packing, once, in DIR/packing (each combination loads DIR/packing.json, no settling of
 // its own). Returns the stage's exit status; on success sets the packing file and hash and
 // adds a line to the header.
@@ -587,7 +637,7 @@ int build_shared_packing(const CompareRequest& req, const RunRequest& base, cons
   const fs::path logs = dir / "logs";
   RunRequest p = base;
   p.out = (dir / "packing").string();
-  p.force = req.force;
+  p.force = req.force || req.resume;  // --resume: a packing stage that did not finish starts again
   p.packing_only = true;
   p.quiet = false;
   if (!req.quiet) std::cerr << "crumble: " << req.command << ": building the packing (log " << (logs / "packing.log").string() << ")\n";
@@ -601,15 +651,7 @@ int build_shared_packing(const CompareRequest& req, const RunRequest& base, cons
     return code;
   }
   fs::copy_file(dir / "packing" / "packing.json", dir / "packing.json", fs::copy_options::overwrite_existing);
-  packing_file = fs::absolute(dir / "packing.json").string();
-  packing_hash = file_sha256(*packing_file);
-  const Json ps = read_summary(dir / "packing" / "summary.json");
-  header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
-                   (ps.is_object() ? ps.value("engine", std::string("?")) : std::string("?")) + "` in " +
-                   fmt(num(ps, "packing_settle_steps"), 12) + " steps (" + fmt(num(ps, "wall_seconds"), 3) +
-                   " s); every combination starts from packing.json, SHA-256 " + packing_hash +
-                   ". A combination on another engine first relaxes it on its own engine under the settling stress "
-                   "(packing.relax auto; what it did is in its summary.json, relax_*).");
+  use_shared_packing(dir, packing_file, packing_hash, header);
   return 0;
 }
 
@@ -633,32 +675,58 @@ void finish_row(ComparisonRow& row, int st, const struct rusage& ru, const fs::p
   }
 }
 
-// Runs combination i in its folder DIR/<name> (log in DIR/logs).
-pid_t start_combination(const CompareRequest& req, const RunRequest& base, const std::vector<Combination>& combos,
-                        std::size_t i, const fs::path& dir, const std::optional<std::string>& packing_file) {
+// The run request of combination i, in its folder DIR/<name>.
+RunRequest combination_request(const RunRequest& base, const Combination& c, const fs::path& dir,
+                               const std::optional<std::string>& packing_file) {
   RunRequest r = base;
-  for (const auto& s : combos[i].sets()) r.sets.push_back(s);
-  r.out = (dir / combos[i].name).string();
-  r.force = req.force;
+  for (const auto& s : c.sets()) r.sets.push_back(s);
+  r.out = (dir / c.name).string();
   r.packing_file = packing_file;
+  return r;
+}
+
+// Runs combination i in its folder DIR/<name> (log in DIR/logs): continued from its
+// checkpoint when `prev` is resumable, else started (over what an unfinished run left).
+pid_t start_combination(const CompareRequest& req, const RunRequest& base, const std::vector<Combination>& combos,
+                        std::size_t i, const fs::path& dir, const std::optional<std::string>& packing_file,
+                        Previous prev) {
+  RunRequest r = combination_request(base, combos[i], dir, packing_file);
+  r.resume = prev == Previous::resumable;
+  r.force = req.force || (req.resume && !r.resume);
   const std::string log = (dir / "logs" / (combos[i].name + ".log")).string();
   if (!req.quiet)
     std::cerr << "crumble: " << req.command << ": [" << i + 1 << "/" << combos.size() << "] " << combos[i].label()
-              << " started (log " << log << ")\n";
+              << (r.resume ? " continued from its checkpoint" : " started") << " (log " << log << ")\n";
   return spawn(r, log);
+}
+
+// --resume: the row of a combination whose run finished before, as it ended.
+void keep_finished_row(const CompareRequest& req, ComparisonRow& row, const fs::path& dir, std::size_t i,
+                       std::size_t n) {
+  row.exit_status = 0;
+  row.status = status_word(0);
+  row.summary = read_summary(dir / row.combination.name / "summary.json");
+  if (!req.quiet)
+    std::cerr << "crumble: " << req.command << ": [" << i + 1 << "/" << n << "] " << row.combination.label()
+              << " finished before: kept (" << (dir / row.combination.name).string() << ")\n";
 }
 
 // The combinations, `jobs` at a time; a stop request is forwarded to the running ones.
 void run_combinations(const CompareRequest& req, const RunRequest& base, const std::vector<Combination>& combos,
                       const fs::path& dir, const std::optional<std::string>& packing_file,
-                      std::vector<ComparisonRow>& rows) {
+                      const std::vector<Previous>& prev, std::vector<ComparisonRow>& rows) {
   std::map<pid_t, std::size_t> running;
   std::map<pid_t, std::chrono::steady_clock::time_point> started;
   std::size_t next = 0;
   bool forwarded = false;
   while (next < combos.size() || !running.empty()) {
     while (!stop_requested() && next < combos.size() && static_cast<int>(running.size()) < req.jobs) {
-      const pid_t pid = start_combination(req, base, combos, next, dir, packing_file);
+      if (prev[next] == Previous::finished) {
+        keep_finished_row(req, rows[next], dir, next, combos.size());
+        ++next;
+        continue;
+      }
+      const pid_t pid = start_combination(req, base, combos, next, dir, packing_file, prev[next]);
       running[pid] = next;
       started[pid] = std::chrono::steady_clock::now();
       ++next;
@@ -691,6 +759,40 @@ void run_combinations(const CompareRequest& req, const RunRequest& base, const s
     if (r.exit_status < 0) r.reason = "not started: the comparison was interrupted";
 }
 
+// --resume: how each combination's folder was left (all `none` without --resume). A run that
+// is kept or continued must have been run with the scenario this request builds for it
+// (InputError naming the first difference, before anything runs).
+std::vector<Previous> previous_runs(const CompareRequest& req, const RunRequest& base,
+                                    const std::vector<Combination>& combos, const fs::path& dir, bool shared_packing) {
+  std::vector<Previous> prev(combos.size(), Previous::none);
+  if (!req.resume) return prev;
+  std::optional<std::string> packing_file;
+  if (shared_packing) packing_file = fs::absolute(dir / "packing.json").string();
+  for (std::size_t i = 0; i < combos.size(); ++i) {
+    prev[i] = previous_run(dir / combos[i].name);
+    if (prev[i] == Previous::none) continue;
+    if (packing_file && !fs::exists(*packing_file))
+      throw InputError("--out " + dir.string() + " --resume: " + *packing_file + ", the packing the run " +
+                       combos[i].name + " started from, is missing; start the comparison again (--force)");
+    check_same_run(combination_request(base, combos[i], dir, packing_file));
+  }
+  return prev;
+}
+
+// The header line of a resumed comparison: what it kept, continued and started.
+std::string resume_line(const std::vector<Previous>& prev) {
+  long kept = 0, continued = 0;
+  for (const Previous p : prev) {
+    kept += p == Previous::finished;
+    continued += p == Previous::resumable;
+  }
+  return "Resumed (`--resume`): " + std::to_string(kept) + " run(s) that had finished kept as they were, " +
+         std::to_string(continued) + " continued from their checkpoints, " +
+         std::to_string(static_cast<long>(prev.size()) - kept - continued) +
+         " started; a continued run's wall time is that of its last part (its summary.json resumed_from_step says "
+         "where that began).";
+}
+
 }  // namespace
 
 int run_compare(const CompareRequest& req) { return compare_runs(req).status; }
@@ -719,23 +821,33 @@ CompareOutcome compare_runs(const CompareRequest& request) {
   std::vector<std::string> folders;
   for (const auto& c : combos) folders.push_back(c.name);
   folders.push_back("packing");
-  prepare_compare_out(req.out, req.force, folders);
+  if (req.resume && req.force) throw InputError("--resume and --force exclude each other");
+  if (req.resume)
+    check_resume_out(req.out, folders);
+  else
+    prepare_compare_out(req.out, req.force, folders);
   const fs::path dir(req.out);
+  const std::vector<Previous> prev = previous_runs(req, base, combos, dir, shared_packing);
   install_stop_signals();
   std::vector<std::string> header = compare_header(req, base_doc, axes, combos.size());
+  if (req.resume) header.push_back(resume_line(prev));
   outcome.axes = axes;
   std::optional<std::string> packing_file;
   if (!shared_packing) {
     header.push_back("Packing: the scenario's scene builds it in each combination (same seed, same grains; "
                      "compare packing_hash in comparison.csv).");
+  } else if (req.resume && fs::exists(dir / "packing.json") && fs::exists(dir / "packing" / "summary.json")) {
+    use_shared_packing(dir, packing_file, outcome.packing_hash, header);
   } else if (const int code = build_shared_packing(req, base, dir, packing_file, outcome.packing_hash, header); code != 0) {
     outcome.status = code == 130 || code == 143 ? code : code == 2 ? 2 : 1;
     return outcome;
   }
   std::vector<ComparisonRow> rows(combos.size());
   for (std::size_t i = 0; i < combos.size(); ++i) rows[i].combination = combos[i];
-  run_combinations(req, base, combos, dir, packing_file, rows);
-  header.push_back("Wall time of the whole comparison: " + fmt(seconds_since(t0), 4) + " s.");
+  run_combinations(req, base, combos, dir, packing_file, prev, rows);
+  header.push_back(std::string(req.resume ? "Wall time of this resumed part of the comparison: "
+                                          : "Wall time of the whole comparison: ") +
+                   fmt(seconds_since(t0), 4) + " s.");
   write_comparison(dir.string(), axes, rows, levels, header);
   if (!req.quiet)
     std::cerr << "crumble: " << req.command << ": " << combos.size() << " combinations in " << fmt(seconds_since(t0), 4)

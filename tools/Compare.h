@@ -48,6 +48,9 @@ struct CompareRequest {
   std::optional<int> threads;
   int jobs = 1;
   bool force = false, quiet = false;
+  // Continue the comparison in `out` (docs/compare.md): runs that finished are kept, the
+  // others continue from their checkpoints (or start again), the packing is reused.
+  bool resume = false;
   std::string command = "compare";  // the subcommand, in progress lines and the table's title
 };
 

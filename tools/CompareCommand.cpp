@@ -29,6 +29,9 @@ class CompareCommand : public Subcommand {
     c->add_flag("--quiet", req_.quiet, "only errors on stderr");
     c->add_flag("--force", req_.force,
                 "use a non-empty --out folder: first remove the files an earlier compare wrote (only crumble's own)");
+    c->add_flag("--resume", req_.resume,
+                "continue the comparison in --out (same scenario, --vary and --set): runs that finished are kept, "
+                "stopped ones continue from their checkpoints, the rest start; the packing is reused");
     c->footer("Exit status: 0 every combination ran; 1 one or more failed while running (their rows say why, the "
               "others still ran); 2 bad input in any combination (checked before anything runs); 130/143 "
               "interrupted.");

@@ -362,3 +362,66 @@ TEST(Compare, AFilePackingIsNotSettledAgain) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("/packing/settle/enabled"), std::string::npos) << r.output;
 }
+
+// `compare --resume` after the whole comparison was killed (SIGKILL to its process group, as
+// when a machine goes away) while its second run was loaded: the finished run is kept as it
+// was (its summary.json byte for byte), the killed one continues from its checkpoint, and
+// both end as in the uninterrupted comparison (lsdem: bit-identical series.csv); a resume that
+// does not match the folder is refused before anything runs.
+TEST(Compare, ResumeKeepsFinishedRunsAndContinuesTheOthers) {
+  const fs::path dir = test_dir();
+  const std::string sc = scenario(dir);
+  const std::string common = " --vary breakage.criterion=von_mises,tresca --threads 1 --jobs 1"
+                             " --set loading.ramp_time=0.05 --set output.checkpoint_every=100"
+                             " --set output.checkpoint_every_s=0";
+  const std::string args = common + " --quiet";
+  const fs::path whole = dir / "whole", cut = dir / "cut";
+  const auto a = run_cli("compare " + sc + " --out " + whole.string() + args);
+  ASSERT_EQ(a.status, 0) << a.output;
+  const fs::path tresca = cut / "breakage.criterion=tresca", vm = cut / "breakage.criterion=von_mises";
+  const std::string part = (tresca / "series.csv.part").string();
+  run_cli("--version >/dev/null; setsid " + std::string(CRUMBLE_BINARY) + " compare " + sc + " --out " + cut.string() +
+          args + " >/dev/null 2>&1 & p=$!; for i in $(seq 1 6000); do [ -f " + part +
+          " ] && awk -F, 'NR>1 && $2>=700 {f=1} END{exit !f}' " + part +
+          " && break; kill -0 $p 2>/dev/null || break; sleep 0.01; done; /usr/bin/kill -KILL -- -$p; wait $p; echo killed");
+  ASSERT_TRUE(fs::exists(vm / "summary.json"));
+  ASSERT_FALSE(fs::exists(tresca / "summary.json")) << "the run ended before it was killed";
+  ASSERT_TRUE(fs::exists(tresca / "checkpoint.json"));
+  ASSERT_FALSE(fs::exists(cut / "comparison.csv"));
+  const std::string kept = slurp(vm / "summary.json");
+
+  expect_bad("compare " + sc + args + " --resume --force", cut / "x", {"--resume and --force exclude each other"});
+  const auto none = run_cli("compare " + sc + " --out " + (dir / "none").string() + args + " --resume");
+  EXPECT_EQ(none.status, 2) << none.output;
+  EXPECT_NE(none.output.find("nothing to resume"), std::string::npos) << none.output;
+  const auto other = run_cli("compare " + sc + " --out " + cut.string() +
+                             " --vary breakage.criterion=max_principal --threads 1 --quiet --resume");
+  EXPECT_EQ(other.status, 2) << other.output;
+  EXPECT_NE(other.output.find("none of this comparison's combinations"), std::string::npos) << other.output;
+  const auto changed = run_cli("compare " + sc + " --out " + cut.string() + args + " --set breakage.strength=16e6 --resume");
+  EXPECT_EQ(changed.status, 2) << changed.output;
+  EXPECT_NE(changed.output.find("/breakage/strength"), std::string::npos) << changed.output;
+  EXPECT_FALSE(fs::exists(tresca / "summary.json"));
+
+  // An edited description is not a different scenario.
+  const auto b = run_cli("compare " + sc + " --out " + cut.string() + common + " --set description=edited --resume");
+  ASSERT_EQ(b.status, 0) << b.output;
+  EXPECT_NE(b.output.find("breakage.criterion=von_mises finished before: kept"), std::string::npos) << b.output;
+  EXPECT_NE(b.output.find("breakage.criterion=tresca continued from its checkpoint"), std::string::npos) << b.output;
+  EXPECT_EQ(slurp(vm / "summary.json"), kept);
+  EXPECT_EQ(slurp(tresca / "series.csv"), slurp(whole / "breakage.criterion=tresca" / "series.csv"));
+  const auto sb = Json::parse(slurp(tresca / "summary.json"));
+  EXPECT_GT(sb["resumed_from_step"].get<long>(), 0);
+  const auto ra = crumble::read_csv((whole / "comparison.csv").string());
+  const auto rb = crumble::read_csv((cut / "comparison.csv").string());
+  ASSERT_EQ(ra.size(), 3u);
+  ASSERT_EQ(rb.size(), ra.size());
+  for (const char* col : {"status", "grains_final", "breakage_events", "void_ratio_final", "psd_d50_final_m", "steps",
+                          "packing_hash"}) {
+    const auto c = std::find(ra[0].begin(), ra[0].end(), col) - ra[0].begin();
+    ASSERT_LT(c, static_cast<long>(ra[0].size())) << col;
+    for (std::size_t i = 1; i < ra.size(); ++i) EXPECT_EQ(rb[i][c], ra[i][c]) << col << " row " << i;
+  }
+  EXPECT_NE(slurp(cut / "comparison.md").find("1 run(s) that had finished kept as they were, 1 continued"),
+            std::string::npos);
+}
