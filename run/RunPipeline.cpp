@@ -220,7 +220,7 @@ std::string no_checkpoint_message(const std::string& out, const Scenario& sc) {
 Json check_same_scenario(const std::string& out, const Json& effective) {
   const fs::path dir(out);
   std::ifstream in(dir / "effective_scenario.json");
-  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json: the folder holds no run");
+  if (!in) throw InputError("--out " + out + " --resume: no effective_scenario.json in the folder");
   std::stringstream ss;
   ss << in.rdbuf();
   Json before = parse_json_text(ss.str(), (dir / "effective_scenario.json").string());
@@ -257,8 +257,6 @@ Json check_same_scenario(const std::string& out, const Json& effective) {
 // but for kResumeMayDiffer; returns the allowed changes (resume_changes).
 Json check_resumable(const std::string& out, const Scenario& sc) {
   if (!fs::exists(fs::path(out) / "checkpoint.json")) throw InputError(no_checkpoint_message(out, sc));
-  if (!fs::exists(fs::path(out) / "effective_scenario.json"))
-    throw InputError("--out " + out + " --resume: no effective_scenario.json beside the checkpoint");
   return check_same_scenario(out, sc.effective);
 }
 

@@ -614,10 +614,14 @@ int wait_forwarding_stop(pid_t pid) {
   }
 }
 
+// The packing every combination loads: DIR/packing.json, by its absolute path (as the runs'
+// effective scenarios name it).
+std::string shared_packing_path(const fs::path& dir) { return fs::absolute(dir / "packing.json").string(); }
+
 // DIR/packing.json as the packing of every combination: its file, hash and header line.
 void use_shared_packing(const fs::path& dir, std::optional<std::string>& packing_file, std::string& packing_hash,
                         std::vector<std::string>& header) {
-  packing_file = fs::absolute(dir / "packing.json").string();
+  packing_file = shared_packing_path(dir);
   packing_hash = file_sha256(*packing_file);
   const Json ps = read_summary(dir / "packing" / "summary.json");
   header.push_back("Packing: " + fmt(num(ps, "grains"), 12) + " grains built and settled once by `" +
@@ -767,7 +771,7 @@ std::vector<Previous> previous_runs(const CompareRequest& req, const RunRequest&
   std::vector<Previous> prev(combos.size(), Previous::none);
   if (!req.resume) return prev;
   std::optional<std::string> packing_file;
-  if (shared_packing) packing_file = fs::absolute(dir / "packing.json").string();
+  if (shared_packing) packing_file = shared_packing_path(dir);
   for (std::size_t i = 0; i < combos.size(); ++i) {
     prev[i] = previous_run(dir / combos[i].name);
     if (prev[i] == Previous::none) continue;
